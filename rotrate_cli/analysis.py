@@ -1,0 +1,233 @@
+"""The whole job in one call: :func:`analyze` for a video, :func:`analyze_tracks` for tracks.
+
+video -> decode (background thread, reduced grey) -> KLT tracks -> offsets from the fixation
+point -> per-track rates -> outlier rejection -> combined omega with a 95% interval.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from rotrate_cli import rates
+from rotrate_cli.decode import FrameSource, prefetch
+from rotrate_cli.errors import InputError, NoResultError
+from rotrate_cli.outliers import Combined, RejectionConfig, combine, combine_plain, flag_samples, judge_fits, judge_paper
+from rotrate_cli.tracking import TrackerConfig, track_frames, tracking_image, tracking_scale
+
+#: Progress callback: (frames done, frames expected or None).
+ProgressCallback = Callable[[int, int | None], None]
+
+DIRECTIONS = ("ccw", "cw", "unknown")
+
+
+@dataclass(frozen=True)
+class AnalysisConfig:
+    """Options of one analysis.
+
+    Attributes:
+        fixation_px: the fixation point (x = column, y = row) on the rotation axis, in pixels.
+        fps: frame-rate override in frames per second (required for image sequences).
+        start_s, end_s: the time span to analyse, in seconds (``end_s`` None: to the end).
+        every: use every N-th frame's positions for the rates (tracking still sees every frame).
+        method: ``fit`` (ours) or ``paper`` (the reference paper's backward differences).
+        tracker: tracking settings.
+        rejection: outlier-rejection thresholds.
+    """
+
+    fixation_px: tuple[float, float]
+    fps: float | None = None
+    start_s: float = 0.0
+    end_s: float | None = None
+    every: int = 1
+    method: str = "fit"
+    tracker: TrackerConfig = field(default_factory=TrackerConfig)
+    rejection: RejectionConfig = field(default_factory=RejectionConfig)
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """The result of one analysis.
+
+    Attributes:
+        source: the input as given.
+        fps: the frame rate used, frames per second.
+        frames: frames analysed.
+        duration_s: time from the first to the last analysed frame, seconds.
+        fixation_px: the fixation point (x, y); y is NaN where only x is known (track files).
+        method: the estimator used.
+        omega_rad_s, omega_low_rad_s, omega_high_rad_s: combined rate and its 95% interval, rad/s.
+        direction: ``ccw``, ``cw`` or ``unknown`` (seen from the top end of the axis).
+        tracks_total, tracks_used: tracks found, and tracks that went into the result.
+        features: one row per track (see :data:`rotrate_cli.outliers.FEATURE_COLUMNS`).
+        samples: one row per track per sample: ``track, frame, time_s, offset_px, dy_dt,
+            d2y_dt2, omega2, omega_rad_s, inlier, reason``.
+        warnings: things the user should know that did not stop the run.
+        position_unit: the unit of positions and offsets (``px`` for videos).
+    """
+
+    source: str
+    fps: float
+    frames: int
+    duration_s: float
+    fixation_px: tuple[float, float]
+    method: str
+    omega_rad_s: float
+    omega_low_rad_s: float
+    omega_high_rad_s: float
+    direction: str
+    tracks_total: int
+    tracks_used: int
+    features: pd.DataFrame
+    samples: pd.DataFrame
+    warnings: tuple[str, ...] = ()
+    position_unit: str = "px"
+
+    @property
+    def rpm(self) -> float:
+        """The combined rate in revolutions per minute."""
+        return self.omega_rad_s * 60.0 / (2.0 * math.pi)
+
+
+@dataclass(frozen=True)
+class RateResult:
+    """What the rate stages produce from a table of offsets."""
+
+    samples: pd.DataFrame
+    features: pd.DataFrame
+    combined: Combined
+    direction: str
+
+
+def _check_config(config: AnalysisConfig) -> None:
+    if config.method not in rates.METHODS:
+        raise InputError(f"unknown method {config.method!r}; use one of {', '.join(rates.METHODS)}")
+    if config.every < 1:
+        raise InputError("--every must be a whole number of frames, 1 or more")
+    if config.start_s < 0 or not math.isfinite(config.start_s):
+        raise InputError("--start must be 0 seconds or later")
+    if config.end_s is not None and not config.end_s > config.start_s:
+        raise InputError("--end must be later than --start")
+
+
+def _thin(tracks: pd.DataFrame, every: int) -> pd.DataFrame:
+    if every == 1 or tracks.empty:
+        return tracks
+    first = int(tracks["frame"].min())
+    return tracks[(tracks["frame"] - first) % every == 0]
+
+
+def _direction(samples: pd.DataFrame, features: pd.DataFrame) -> str:
+    """Sense of rotation from the net horizontal travel of the inlier tracks.
+
+    An opaque object shows its near side, whose points cross in front of the axis: moving right
+    means anticlockwise seen from above. Far-side points (a transparent object, a turntable's top
+    seen from above) travel the other way, so the answer is given only on a clear majority.
+    """
+    used = features.loc[features["inlier"], "track"]
+    if len(used) < 5:
+        return "unknown"
+    part = samples[samples["track"].isin(used)].groupby("track", sort=False)["offset_px"]
+    travel = (part.last() - part.first()).to_numpy()
+    total = float(np.abs(travel).sum())
+    if total <= 0:
+        return "unknown"
+    balance = float(travel.sum()) / total
+    if balance >= 0.7:
+        return "ccw"
+    if balance <= -0.7:
+        return "cw"
+    return "unknown"
+
+
+def rates_from_offsets(offsets: pd.DataFrame, method: str, rejection: RejectionConfig) -> RateResult:
+    """Per-sample rates, per-track verdicts and the combined rate.
+
+    ``offsets`` has columns ``track, frame, time_s, offset_px``, one row per sample.
+    """
+    offsets = offsets.sort_values(["track", "time_s"], kind="stable").reset_index(drop=True)
+    if method == "paper":
+        samples, features = judge_paper(rates.paper_samples(offsets))
+        combined = combine_plain(features.loc[features["inlier"], "omega_rad_s"].to_numpy())
+    else:
+        fits = rates.fit_tracks(offsets)
+        features = judge_fits(offsets, fits, rejection)
+        samples = flag_samples(rates.fit_samples(offsets, fits), features, rejection)
+        used = features[features["inlier"]]
+        combined = combine(used["omega_rad_s"].to_numpy(), used["omega_se_rad_s"].to_numpy())
+    return RateResult(samples, features, combined, _direction(samples, features))
+
+
+def _no_result_message(features: pd.DataFrame) -> str:
+    if features.empty:
+        return "no point could be tracked; check that the object moves and has texture, or pass --roi"
+    counts = Counter(features["reason"])
+    detail = ", ".join(f"{n} {why}" for why, n in counts.most_common())
+    return f"no track gave a trustworthy rate ({detail}); try a longer clip, --roi around the object, or check --fixation"
+
+
+def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None = None) -> Analysis:
+    """Measure the rotation rate of the object in a video or image sequence.
+
+    Raises:
+        InputError: bad source or options.
+        NoResultError: the video was read but no track gave a trustworthy rate.
+    """
+    _check_config(config)
+    video = FrameSource(source, fps=config.fps)
+    info = video.info
+    fx, fy = config.fixation_px
+    if not (0 <= fx <= info.width_px - 1 and 0 <= fy <= info.height_px - 1):
+        raise InputError(
+            f"fixation ({fx:g}, {fy:g}) lies outside the {info.width_px}x{info.height_px} frame; "
+            "give X,Y in pixels inside it"
+        )
+    roi = config.tracker.roi
+    if roi is not None and (
+        roi.width_px <= 0 or roi.height_px <= 0 or roi.x_px < 0 or roi.y_px < 0
+        or roi.x_px + roi.width_px > info.width_px or roi.y_px + roi.height_px > info.height_px
+    ):
+        raise InputError(f"--roi must be X,Y,W,H inside the {info.width_px}x{info.height_px} frame")
+
+    scale = tracking_scale(info.width_px, config.tracker)
+    frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale))
+    expected = info.frame_count
+    notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
+    tracks, count = track_frames(prefetch(frames), (info.width_px, info.height_px), config.tracker, notify)
+    if count == 0:
+        raise InputError(f"no frame of {source} lies between --start and --end")
+    if count < 3:
+        raise InputError(f"{source} has only {count} frame(s) to analyse; rotation needs at least 3")
+    warnings = []
+    if expected and config.start_s == 0 and config.end_s is None and count < expected - 1:
+        warnings.append(f"decoded {count} of the {expected} frames the file announces; it may be cut off")
+
+    offsets = _thin(tracks, config.every).assign(offset_px=lambda t: t["x_px"] - fx)
+    result = rates_from_offsets(offsets[["track", "frame", "time_s", "offset_px"]], config.method, config.rejection)
+    times = tracks["time_s"] if not tracks.empty else pd.Series([0.0])
+    analysis = Analysis(
+        source=str(source),
+        fps=info.fps,
+        frames=count,
+        duration_s=float(times.max() - times.min()),
+        fixation_px=(float(fx), float(fy)),
+        method=config.method,
+        omega_rad_s=result.combined.omega_rad_s,
+        omega_low_rad_s=result.combined.omega_low_rad_s,
+        omega_high_rad_s=result.combined.omega_high_rad_s,
+        direction=result.direction,
+        tracks_total=int(len(result.features)),
+        tracks_used=result.combined.tracks_used,
+        features=result.features,
+        samples=result.samples,
+        warnings=tuple(warnings),
+    )
+    if analysis.tracks_used == 0:
+        raise NoResultError(_no_result_message(result.features))
+    return analysis

@@ -1,0 +1,273 @@
+"""Video and image-sequence decoding, streamed frame by frame.
+
+A :class:`FrameSource` opens a video file (anything OpenCV's FFmpeg backend reads), a printf
+pattern of images (``frames/viff.%03d.png``) or a folder of images in natural name order, and
+yields :class:`Frame` objects one at a time, so memory does not grow with the length of the clip.
+Frame times come from the decoder's timestamps; where a container has none (or an image sequence
+has no rate) they fall back to ``index / fps``, and a user-given ``fps`` always overrides.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import re
+import threading
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from rotrate_cli.errors import InputError
+
+IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm"})
+#: Frame rates outside this range are treated as missing or absurd.
+MIN_FPS = 1e-3
+MAX_FPS = 10_000.0
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What is known about a source before decoding it.
+
+    Attributes:
+        source: the path or pattern as the user gave it.
+        width_px, height_px: frame size in pixels.
+        fps: frame rate in frames per second (the container's, or the user's override).
+        frame_count: the container's frame count, or the number of images; None when unknown.
+        is_image_sequence: True for image patterns and folders.
+        fps_overridden: True when the user gave the rate, so times are ``index / fps``.
+    """
+
+    source: str
+    width_px: int
+    height_px: int
+    fps: float
+    frame_count: int | None
+    is_image_sequence: bool
+    fps_overridden: bool
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One decoded frame: its 0-based index in the source, its time in seconds, and its pixels.
+
+    ``image`` is whatever the source's transform returned (BGR uint8 by default).
+    """
+
+    index: int
+    time_s: float
+    image: Any
+
+
+def _natural_key(name: str) -> list[Any]:
+    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", name)]
+
+
+def _pattern_files(pattern: str) -> list[Path]:
+    """Expand a printf pattern such as ``dir/img.%03d.png`` to the existing files, in order.
+
+    Numbering starts at the first existing index among 0..9999 and stops at the first gap,
+    as OpenCV's image-sequence reader does.
+    """
+    try:
+        pattern % 0
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"bad image pattern {pattern!r}: use one printf field such as %03d") from exc
+    first = next((i for i in range(10_000) if Path(pattern % i).is_file()), None)
+    if first is None:
+        raise InputError(f"no image matches the pattern {pattern!r}; check the folder and the %d field")
+    files = []
+    index = first
+    while Path(pattern % index).is_file():
+        files.append(Path(pattern % index))
+        index += 1
+    return files
+
+
+def _folder_files(folder: Path) -> list[Path]:
+    files = [p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES]
+    if not files:
+        raise InputError(f"the folder {folder} holds no images ({', '.join(sorted(IMAGE_SUFFIXES))})")
+    return sorted(files, key=lambda p: _natural_key(p.name))
+
+
+def _check_fps(fps: float | None, what: str) -> None:
+    if fps is not None and not (MIN_FPS <= fps <= MAX_FPS and math.isfinite(fps)):
+        raise InputError(f"{what} frame rate {fps} is not usable; pass --fps with a value between {MIN_FPS} and {MAX_FPS:g}")
+
+
+class FrameSource:
+    """A video file or an image sequence, opened for streaming.
+
+    Args:
+        source: video path, printf image pattern, or folder of images.
+        fps: frame rate override in frames per second; required for image sequences.
+
+    Raises:
+        InputError: the source does not exist, cannot be decoded, or has no usable frame rate.
+    """
+
+    def __init__(self, source: str | Path, fps: float | None = None) -> None:
+        self._source = str(source)
+        _check_fps(fps, "the given")
+        self._files: list[Path] | None = None
+        path = Path(self._source)
+        if "%" in path.name:
+            self._files = _pattern_files(self._source)
+        elif path.is_dir():
+            self._files = _folder_files(path)
+        elif not path.exists():
+            raise InputError(f"no such file: {self._source}")
+        elif not path.is_file():
+            raise InputError(f"not a regular file: {self._source}")
+        elif path.stat().st_size == 0:
+            raise InputError(f"the file is empty: {self._source}")
+
+        if self._files is not None:
+            if fps is None:
+                raise InputError("an image sequence has no frame rate; pass --fps (frames per second)")
+            first = cv2.imread(str(self._files[0]), cv2.IMREAD_COLOR)
+            if first is None:
+                raise InputError(f"could not read the image {self._files[0]}; is it a picture file?")
+            height, width = first.shape[:2]
+            self.info = VideoInfo(self._source, width, height, float(fps), len(self._files), True, True)
+            return
+
+        capture = self._open_capture()
+        try:
+            ok, first = capture.read()
+            if not ok or first is None:
+                raise InputError(f"could not decode {self._source} as a video; is it a video file (mp4, mov, avi, mkv)?")
+            container_fps = float(capture.get(cv2.CAP_PROP_FPS) or 0.0)
+            count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+        finally:
+            capture.release()
+        if fps is None:
+            if not (MIN_FPS <= container_fps <= MAX_FPS and math.isfinite(container_fps)):
+                raise InputError(f"could not read the frame rate of {self._source}; pass --fps")
+        height, width = first.shape[:2]
+        self.info = VideoInfo(
+            self._source,
+            width,
+            height,
+            float(fps if fps is not None else container_fps),
+            count if count > 0 else None,
+            False,
+            fps is not None,
+        )
+
+    def _open_capture(self) -> cv2.VideoCapture:
+        capture = cv2.VideoCapture(self._source, cv2.CAP_FFMPEG)
+        if not capture.isOpened():
+            capture.release()
+            raise InputError(f"could not open {self._source} as a video; is it a video file (mp4, mov, avi, mkv)?")
+        return capture
+
+    def frames(
+        self,
+        start_s: float = 0.0,
+        end_s: float | None = None,
+        transform: Callable[[np.ndarray], Any] | None = None,
+    ) -> Iterator[Frame]:
+        """Yield frames whose time lies in ``[start_s, end_s]``, in order, one at a time.
+
+        ``transform`` is applied to each kept frame's BGR pixels before it is yielded (for
+        example a conversion to a reduced grey image), so a caller that decodes in a background
+        thread also converts there.
+        """
+        convert = transform if transform is not None else (lambda image: image)
+        if self._files is not None:
+            for index, file in enumerate(self._files):
+                time_s = index / self.info.fps
+                if time_s < start_s - 1e-9:
+                    continue
+                if end_s is not None and time_s > end_s + 1e-9:
+                    return
+                image = cv2.imread(str(file), cv2.IMREAD_COLOR)
+                if image is None:
+                    raise InputError(f"could not read the image {file}")
+                if image.shape[:2] != (self.info.height_px, self.info.width_px):
+                    raise InputError(f"the image {file} is {image.shape[1]}x{image.shape[0]}, not the sequence's "
+                                     f"{self.info.width_px}x{self.info.height_px}")
+                yield Frame(index, time_s, convert(image))
+            return
+
+        capture = self._open_capture()
+        try:
+            index = -1
+            last_time_s = -math.inf
+            while True:
+                if not capture.grab():
+                    return
+                index += 1
+                time_s = self._frame_time_s(capture, index, last_time_s)
+                last_time_s = time_s
+                if time_s < start_s - 1e-9:
+                    continue
+                if end_s is not None and time_s > end_s + 1e-9:
+                    return
+                ok, image = capture.retrieve()
+                if not ok or image is None:
+                    return
+                yield Frame(index, time_s, convert(image))
+        finally:
+            capture.release()
+
+    def _frame_time_s(self, capture: cv2.VideoCapture, index: int, last_time_s: float) -> float:
+        fallback = index / self.info.fps
+        if self.info.fps_overridden:
+            return fallback
+        stamp_ms = capture.get(cv2.CAP_PROP_POS_MSEC)
+        # Decoders without timestamps report 0 or go backwards; fall back to index / fps then.
+        if not math.isfinite(stamp_ms) or stamp_ms < 0 or (index > 0 and stamp_ms / 1000.0 <= last_time_s):
+            return fallback
+        return stamp_ms / 1000.0
+
+
+def prefetch(frames: Iterator[Frame], depth: int = 8) -> Iterator[Frame]:
+    """Run a frame iterator in a background thread and yield its frames here.
+
+    OpenCV releases the GIL while it decodes, so decoding (and any transform attached to the
+    iterator) overlaps with the consumer's work. At most ``depth`` frames wait in the queue, so
+    memory stays bounded. Exceptions from the decoder are re-raised in the consumer.
+    """
+    done = object()
+    slots: queue.Queue[Any] = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+
+    def produce() -> None:
+        try:
+            for frame in frames:
+                while not stop.is_set():
+                    try:
+                        slots.put(frame, timeout=0.1)
+                        break
+                    except queue.Full:
+                        continue
+                if stop.is_set():
+                    return
+            slots.put(done)
+        except BaseException as exc:  # noqa: BLE001 - handed to the consumer to re-raise
+            slots.put(exc)
+
+    worker = threading.Thread(target=produce, name="rotrate-decode", daemon=True)
+    worker.start()
+    try:
+        while True:
+            item = slots.get()
+            if item is done:
+                return
+            if isinstance(item, BaseException):
+                raise item
+            yield item
+    finally:
+        stop.set()
+        while worker.is_alive():
+            try:
+                slots.get_nowait()
+            except queue.Empty:
+                worker.join(timeout=0.05)
