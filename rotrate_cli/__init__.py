@@ -1,0 +1,23 @@
+"""rotrate: measure how fast a rigid object spins, in rad/s, from an ordinary video.
+
+One call does the whole job::
+
+    from rotrate_cli import AnalysisConfig, analyze
+    result = analyze("car.mp4", AnalysisConfig(fixation_px=(640, 360)))
+    print(result.omega_rad_s, result.omega_low_rad_s, result.omega_high_rad_s)
+
+The library never prints or exits; it raises :class:`InputError` (bad input) and
+:class:`NoResultError` (no trustworthy result), both :class:`RotrateError`.
+"""
+
+from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks
+from rotrate_cli.errors import InputError, NoResultError, OutputError, RotrateError
+from rotrate_cli.outliers import RejectionConfig
+from rotrate_cli.tracking import Roi, TrackerConfig
+from rotrate_cli.tracks_io import read_tracks
+
+__all__ = [
+    "Analysis", "AnalysisConfig", "InputError", "NoResultError", "OutputError", "RejectionConfig", "Roi",
+    "RotrateError", "TrackerConfig", "analyze", "analyze_tracks", "read_tracks",
+]
+__version__ = "0.1.0"

@@ -208,6 +208,7 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     if expected and config.start_s == 0 and config.end_s is None and count < expected - 1:
         warnings.append(f"decoded {count} of the {expected} frames the file announces; it may be cut off")
 
+    tracks = tracks.assign(track=tracks["track"] + 1)  # features are numbered from 1, as in the paper
     offsets = _thin(tracks, config.every).assign(offset_px=lambda t: t["x_px"] - fx)
     result = rates_from_offsets(offsets[["track", "frame", "time_s", "offset_px"]], config.method, config.rejection)
     times = tracks["time_s"] if not tracks.empty else pd.Series([0.0])
@@ -227,6 +228,67 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         features=result.features,
         samples=result.samples,
         warnings=tuple(warnings),
+    )
+    if analysis.tracks_used == 0:
+        raise NoResultError(_no_result_message(result.features))
+    return analysis
+
+
+def analyze_tracks(
+    tracks: pd.DataFrame,
+    fixation: float,
+    *,
+    source: str = "tracks",
+    fps: float | None = None,
+    every: int = 1,
+    method: str = "fit",
+    rejection: RejectionConfig | None = None,
+    position_unit: str = "units",
+) -> Analysis:
+    """Measure the rotation rate from given tracks (``track, frame, time_s, position``).
+
+    ``fixation`` is the axis position in the positions' units. Times are ``frame / fps`` when
+    ``fps`` is given, else the ``time_s`` column.
+
+    Raises:
+        InputError: no usable times, or bad options.
+        NoResultError: no track gave a trustworthy rate.
+    """
+    _check_config(AnalysisConfig(fixation_px=(fixation, 0.0), fps=fps, every=every, method=method))
+    if not math.isfinite(fixation):
+        raise InputError("--fixation must be a number (the axis position in the tracks' units)")
+    table = tracks.copy()
+    if fps is not None:
+        if not (fps > 0 and math.isfinite(fps)):
+            raise InputError("--fps must be a positive number of frames per second")
+        table["time_s"] = table["frame"] / fps
+    elif table["time_s"].isna().any():
+        raise InputError("the tracks have no time_s column; pass --fps")
+    else:
+        spacing = np.diff(np.sort(table["frame"].unique()))
+        elapsed = table["time_s"].max() - table["time_s"].min()
+        fps = float(np.median(spacing)) / float(np.median(np.diff(np.sort(table["time_s"].unique())))) if len(spacing) and elapsed > 0 else math.nan
+    if table.groupby("track")["time_s"].apply(lambda t: bool((np.diff(t.to_numpy()) <= 0).any())).any():
+        raise InputError("times must increase along each track")
+    offsets = _thin(table, every).assign(offset_px=lambda t: t["position"] - fixation)
+    rules = rejection if rejection is not None else RejectionConfig(min_range=0.0, residual_floor=0.0)
+    result = rates_from_offsets(offsets[["track", "frame", "time_s", "offset_px"]], method, rules)
+    analysis = Analysis(
+        source=source,
+        fps=float(fps),
+        frames=int(table["frame"].nunique()),
+        duration_s=float(table["time_s"].max() - table["time_s"].min()),
+        fixation_px=(float(fixation), math.nan),
+        method=method,
+        omega_rad_s=result.combined.omega_rad_s,
+        omega_low_rad_s=result.combined.omega_low_rad_s,
+        omega_high_rad_s=result.combined.omega_high_rad_s,
+        direction=result.direction,
+        tracks_total=int(len(result.features)),
+        tracks_used=result.combined.tracks_used,
+        features=result.features,
+        samples=result.samples,
+        position_unit=position_unit,
     )
     if analysis.tracks_used == 0:
         raise NoResultError(_no_result_message(result.features))

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy import stats
+from scipy.special import stdtrit
 
 from rotrate_cli.rates import TrackFit
 
@@ -127,7 +127,7 @@ def combine(omega_rad_s: np.ndarray, se_rad_s: np.ndarray) -> Combined:
         return Combined(math.nan, math.nan, math.nan, 0)
     if k == 1:
         half = 1.96 * float(se[0])
-        return Combined(float(omega[0]), float(omega[0]) - half, float(omega[0]) + half, 1)
+        return Combined(float(omega[0]), max(float(omega[0]) - half, 0.0), float(omega[0]) + half, 1)
     weights = 1.0 / se**2
     fixed = float(weights @ omega / weights.sum())
     q = float(weights @ (omega - fixed) ** 2)
@@ -139,8 +139,8 @@ def combine(omega_rad_s: np.ndarray, se_rad_s: np.ndarray) -> Combined:
     # Hartung-Knapp style rescaling keeps the interval honest when the tracks scatter.
     spread = float(weights @ (omega - mean) ** 2) / (k - 1)
     standard_error *= math.sqrt(max(spread, 1.0))
-    half = float(stats.t.ppf(0.975, k - 1)) * standard_error
-    return Combined(mean, mean - half, mean + half, k)
+    half = float(stdtrit(k - 1, 0.975)) * standard_error
+    return Combined(mean, max(mean - half, 0.0), mean + half, k)
 
 
 def combine_plain(values: np.ndarray) -> Combined:
@@ -152,7 +152,7 @@ def combine_plain(values: np.ndarray) -> Combined:
     mean = float(values.mean())
     if k == 1:
         return Combined(mean, math.nan, math.nan, 1)
-    half = float(stats.t.ppf(0.975, k - 1)) * float(values.std(ddof=1)) / math.sqrt(k)
+    half = float(stdtrit(k - 1, 0.975)) * float(values.std(ddof=1)) / math.sqrt(k)
     return Combined(mean, mean - half, mean + half, k)
 
 

@@ -27,7 +27,6 @@ import numpy as np
 import pandas as pd
 
 METHODS = ("fit", "paper")
-SAMPLE_COLUMNS = ("track", "frame", "time_s", "offset_px", "dy_dt", "d2y_dt2", "omega2", "omega_rad_s")
 
 
 @dataclass(frozen=True)
@@ -150,56 +149,67 @@ def local_lag(omega_dt_rad: float, n: int) -> int:
     """The lag (in samples) for per-sample second differences.
 
     The second difference grows as ``(omega m dt)^2`` while its noise stays ``~2 sigma``, so a
-    longer lag is better until the three samples span a large arc; aim for about a radian.
+    longer lag is better until the three samples span a large arc: aim for half a radian, but
+    keep at least half of the track's samples with a value.
     """
     if omega_dt_rad <= 0 or not math.isfinite(omega_dt_rad):
         return 1
-    return int(max(1, min(round(1.0 / omega_dt_rad), (n - 1) // 2)))
+    return int(max(1, min(round(0.5 / omega_dt_rad), (n - 1) // 4)))
+
+
+def _track_slices(tracks: np.ndarray) -> list[slice]:
+    """Slices of consecutive equal ids in a sorted id array."""
+    if len(tracks) == 0:
+        return []
+    edges = np.flatnonzero(np.diff(tracks)) + 1
+    bounds = np.concatenate([[0], edges, [len(tracks)]])
+    return [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
 def fit_samples(samples: pd.DataFrame, fits: dict[int, TrackFit]) -> pd.DataFrame:
     """Per-sample values for the fit method: central differences at lag ``m`` and the exact
     discrete rate ``omega = arccos((y[k+m] + y[k-m]) / (2 y[k])) / (m dt)``.
 
-    ``dy_dt`` is the central difference at that lag and ``d2y_dt2 = -omega2 * y``, the second
-    derivative of the sinusoid through the three samples; rows near a track's ends have NaN.
+    ``samples`` is sorted by track, then time. ``dy_dt`` is the central difference at that lag
+    and ``d2y_dt2 = -omega2 * y``, the second derivative of the sinusoid through the three
+    samples; rows near a track's ends have NaN.
     """
-    parts = []
-    for track, group in samples.groupby("track", sort=False):
-        time_s = group["time_s"].to_numpy()
-        offset = group["offset_px"].to_numpy()
+    table = samples.loc[:, ["track", "frame", "time_s", "offset_px"]].reset_index(drop=True)
+    tracks = table["track"].to_numpy()
+    times = table["time_s"].to_numpy(dtype=float)
+    offsets = table["offset_px"].to_numpy(dtype=float)
+    n_all = len(table)
+    dy = np.full(n_all, np.nan)
+    omega2 = np.full(n_all, np.nan)
+    for part in _track_slices(tracks):
+        time_s, offset = times[part], offsets[part]
         n = len(offset)
-        fit = fits.get(int(track), _FAILED)
-        dt = float(np.median(np.diff(time_s))) if n > 1 else math.nan
-        lag = local_lag(fit.omega_rad_s * dt, n) if n > 2 else 1
-        dy = np.full(n, np.nan)
-        d2y = np.full(n, np.nan)
-        omega2 = np.full(n, np.nan)
-        if n > 2 * lag:
-            k = np.arange(lag, n - lag)
-            step_s = (time_s[k + lag] - time_s[k - lag]) / 2.0
-            dy[k] = (offset[k + lag] - offset[k - lag]) / (2.0 * step_s)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                cosine = (offset[k + lag] + offset[k - lag]) / (2.0 * offset[k])
-                rate = np.where(np.abs(cosine) <= 1.0, np.arccos(np.clip(cosine, -1.0, 1.0)) / step_s, np.nan)
-                # cos > 1 means the point curves away from the axis: a negative omega^2.
-                rate2 = np.where(cosine > 1.0, -(np.arccosh(np.maximum(cosine, 1.0)) / step_s) ** 2, rate**2)
-            omega2[k] = rate2
-            d2y[k] = -omega2[k] * offset[k]
-        part = group.loc[:, ["track", "frame", "time_s", "offset_px"]].copy()
-        part["dy_dt"] = dy
-        part["d2y_dt2"] = d2y
-        part["omega2"] = omega2
-        part["omega_rad_s"] = np.sqrt(np.where(omega2 > 0, omega2, np.nan))
-        parts.append(part)
-    if not parts:
-        return pd.DataFrame({name: pd.Series(dtype="float64") for name in SAMPLE_COLUMNS})
-    return pd.concat(parts, ignore_index=True)
+        if n < 3:
+            continue
+        fit = fits.get(int(tracks[part.start]), _FAILED)
+        lag = local_lag(fit.omega_rad_s * float(np.median(np.diff(time_s))), n)
+        if n <= 2 * lag:
+            continue
+        k = np.arange(lag, n - lag)
+        step_s = (time_s[k + lag] - time_s[k - lag]) / 2.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cosine = (offset[k + lag] + offset[k - lag]) / (2.0 * offset[k])
+            rate = np.arccos(np.clip(cosine, -1.0, 1.0)) / step_s
+            # cos > 1 means the point curves away from the axis: a negative omega^2.
+            rate2 = np.where(cosine > 1.0, -(np.arccosh(np.maximum(cosine, 1.0)) / step_s) ** 2, rate**2)
+        dy[part.start + k] = (offset[k + lag] - offset[k - lag]) / (2.0 * step_s)
+        omega2[part.start + k] = rate2
+    table["dy_dt"] = dy
+    table["d2y_dt2"] = -omega2 * offsets
+    table["omega2"] = omega2
+    table["omega_rad_s"] = np.sqrt(np.where(omega2 > 0, omega2, np.nan))
+    return table
 
 
 def fit_tracks(samples: pd.DataFrame) -> dict[int, TrackFit]:
-    """Fit every track of ``samples`` (columns ``track, time_s, offset_px``); keyed by track."""
-    fits: dict[int, TrackFit] = {}
-    for track, group in samples.groupby("track", sort=False):
-        fits[int(track)] = fit_track(group["time_s"].to_numpy(), group["offset_px"].to_numpy())
-    return fits
+    """Fit every track of ``samples`` (sorted by track then time; columns ``track, time_s,
+    offset_px``); keyed by track."""
+    tracks = samples["track"].to_numpy()
+    times = samples["time_s"].to_numpy(dtype=float)
+    offsets = samples["offset_px"].to_numpy(dtype=float)
+    return {int(tracks[part.start]): fit_track(times[part], offsets[part]) for part in _track_slices(tracks)}

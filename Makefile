@@ -1,0 +1,36 @@
+# Every target creates the virtual environment it needs (.venv), from pyproject.toml.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+DINO := ../shared/data/dinosaur
+
+.PHONY: demo test test-slow lint bench bench-accuracy clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+## demo: measure the bundled sample clip (truth: 0.6 rad/s, ccw)
+demo: $(STAMP)
+	$(BIN)/rotrate analyze sample_videos/box_ortho.mp4 --fixation 319.5,179.5
+
+## test: the default suite (unit, CLI, sample-clip regression, paper Table I, dinosaur)
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+## test-slow: longer suites (rendering on the fly, long clips)
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -m slow
+
+lint: $(STAMP)
+	$(BIN)/ruff check rotrate_cli tests benchmarks
+
+## bench: decode vs analyze speed on a 720p clip, and peak memory for a clip and one 4x as long
+bench: $(STAMP)
+	$(BIN)/python benchmarks/bench_speed.py
+
+clean:
+	rm -rf $(VENV) .pytest_cache .ruff_cache bench_out

@@ -1,0 +1,226 @@
+"""The ``rotrate`` command line: a thin Typer layer over the library.
+
+It parses options into configurations, calls the library, renders the result, and maps the
+library's typed errors to one line on stderr and an exit code: 0 a result, 1 no trustworthy
+result, 2 bad input or usage, 130 interrupted. ``--debug`` shows tracebacks.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import traceback
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, TypeVar
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from rotrate_cli import rates
+from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks
+from rotrate_cli.errors import InputError, RotrateError
+from rotrate_cli.report import FORMATS, check_output_path, render, render_table, write_text
+from rotrate_cli.synth import PROJECTIONS, SHAPES, SceneConfig, write_clip
+from rotrate_cli.tracking import Roi, TrackerConfig
+from rotrate_cli.tracks_io import read_tracks
+
+app = typer.Typer(
+    name="rotrate",
+    help="Measure how fast a rigid object spins (rad/s) from a video with a static camera.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+T = TypeVar("T")
+
+FormatOption = Annotated[str, typer.Option("--format", "-f", help="table, csv (Table I layout) or json.")]
+OutputOption = Annotated[Path | None, typer.Option("--output", "-o", help="Write the report to this file.")]
+ForceOption = Annotated[bool, typer.Option("--force", help="Replace an existing --output file.")]
+MethodOption = Annotated[str, typer.Option("--method", help="fit (ours: sinusoid fit per track) or paper "
+                                                            "(the reference paper's backward differences).")]
+EveryOption = Annotated[int, typer.Option("--every", help="Use every N-th frame's positions, as the paper did.")]
+DebugOption = Annotated[bool, typer.Option("--debug", help="Show the traceback of an error.")]
+QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
+
+
+def _fail(message: str, code: int) -> typer.Exit:
+    Console(stderr=True, highlight=False, soft_wrap=True).print(f"rotrate: error: {message}", markup=False)
+    return typer.Exit(code)
+
+
+def _run(debug: bool, job: Callable[[], T]) -> T:
+    """Run ``job``, turning errors into one line and an exit code."""
+    try:
+        return job()
+    except RotrateError as exc:
+        if debug:
+            traceback.print_exc()
+        raise _fail(str(exc), exc.exit_code) from None
+    except KeyboardInterrupt:
+        raise _fail("interrupted", 130) from None
+    except typer.Exit:
+        raise
+    except Exception as exc:  # noqa: BLE001 - the user gets one line, the developer --debug
+        if debug:
+            traceback.print_exc()
+        raise _fail(f"unexpected {type(exc).__name__}: {exc} (rerun with --debug for details)", 3) from None
+
+
+def _numbers(text: str, count: int, option: str, example: str) -> list[float]:
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise InputError(f"{option} takes {count} numbers separated by a comma, such as {example}; got {text!r}")
+    return values
+
+
+def _check_format(fmt: str) -> None:
+    if fmt not in FORMATS:
+        raise InputError(f"--format must be one of {', '.join(FORMATS)}; got {fmt!r}")
+
+
+def _check_method(method: str) -> None:
+    if method not in rates.METHODS:
+        raise InputError(f"--method must be one of {', '.join(rates.METHODS)}; got {method!r}")
+
+
+def _emit(analysis: Analysis, fmt: str, output: Path | None, force: bool) -> None:
+    if output is not None:
+        write_text(output, render(analysis, fmt), force)
+        return
+    if fmt == "table":
+        render_table(analysis, Console(highlight=False))
+    else:
+        sys.stdout.write(render(analysis, fmt))
+        sys.stdout.flush()
+
+
+@contextmanager
+def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | None]:
+    console = Console(stderr=True)
+    if quiet or not console.is_terminal:
+        yield None
+        return
+    columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=console, transient=True) as progress:
+        task = progress.add_task("frames", total=None)
+
+        def update(done: int, total: int | None) -> None:
+            progress.update(task, completed=done, total=total)
+
+        yield update
+
+
+@app.command("analyze")
+def analyze_command(
+    video: Annotated[str, typer.Argument(help="Video file, image folder, or printf pattern like frames/img.%03d.png.")],
+    fixation: Annotated[str, typer.Option("--fixation", help="X,Y pixel of a point on the rotation axis.")],
+    fps: Annotated[float | None, typer.Option("--fps", help="Frame rate; overrides the file's, required for images.")] = None,
+    start: Annotated[float, typer.Option("--start", help="Start time, s.")] = 0.0,
+    end: Annotated[float | None, typer.Option("--end", help="End time, s.")] = None,
+    roi: Annotated[str | None, typer.Option("--roi", help="X,Y,W,H: seed points only in this box.")] = None,
+    every: EveryOption = 1,
+    method: MethodOption = "fit",
+    fmt: FormatOption = "table",
+    output: OutputOption = None,
+    force: ForceOption = False,
+    quiet: QuietOption = False,
+    debug: DebugOption = False,
+) -> None:
+    """Track points on the spinning object and report its rotation rate."""
+
+    def job() -> int:
+        _check_format(fmt)
+        _check_method(method)
+        fx, fy = _numbers(fixation, 2, "--fixation", "640,360")
+        tracker = TrackerConfig()
+        if roi is not None:
+            x, y, w, h = _numbers(roi, 4, "--roi", "100,50,400,300")
+            tracker = TrackerConfig(roi=Roi(int(x), int(y), int(w), int(h)))
+        if output is not None:
+            check_output_path(output, force)  # fail before a long run, not after
+        config = AnalysisConfig(fixation_px=(fx, fy), fps=fps, start_s=start, end_s=end, every=every,
+                                method=method, tracker=tracker)
+        with _progress_bar(quiet) as progress:
+            analysis = analyze(video, config, progress)
+        _emit(analysis, fmt, output, force)
+        for warning in analysis.warnings:
+            Console(stderr=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
+        return 0
+
+    _run(debug, job)
+
+
+@app.command("omega")
+def omega_command(
+    tracks: Annotated[Path, typer.Argument(help="CSV of tracks: track (or feature), frame, [time_s], position.")],
+    fixation: Annotated[float, typer.Option("--fixation", help="Axis position, in the position column's units.")],
+    position_column: Annotated[str, typer.Option("--position-column", help="The horizontal position column.")] = "x",
+    fps: Annotated[float | None, typer.Option("--fps", help="Frame rate: times are frame / fps (else time_s).")] = None,
+    every: EveryOption = 1,
+    method: MethodOption = "fit",
+    fmt: FormatOption = "table",
+    output: OutputOption = None,
+    force: ForceOption = False,
+    debug: DebugOption = False,
+) -> None:
+    """Rotation rate from tracked positions in a file (for example the paper's Table I)."""
+
+    def job() -> int:
+        _check_format(fmt)
+        _check_method(method)
+        table = read_tracks(tracks, position_column)
+        unit = position_column.rsplit("_", 1)[1] if "_" in position_column else "units"
+        analysis = analyze_tracks(table, fixation, source=str(tracks), fps=fps, every=every, method=method,
+                                  position_unit=unit)
+        _emit(analysis, fmt, output, force)
+        return 0
+
+    _run(debug, job)
+
+
+@app.command("synth")
+def synth_command(
+    output: Annotated[Path, typer.Argument(help="Video to write (.mp4); the truth goes beside it as .json.")],
+    shape: Annotated[str, typer.Option("--shape", help=f"One of {', '.join(SHAPES)}.")] = "box",
+    omega: Annotated[float, typer.Option("--omega", help="Rate in rad/s; negative turns clockwise seen from above.")] = 0.5,
+    fps: Annotated[float, typer.Option("--fps", help="Frames per second.")] = 30.0,
+    duration: Annotated[float, typer.Option("--duration", help="Length, s.")] = 5.0,
+    size: Annotated[str, typer.Option("--size", help="WIDTHxHEIGHT in pixels.")] = "640x360",
+    projection: Annotated[str, typer.Option("--projection", help=f"One of {', '.join(PROJECTIONS)}.")] = "orthographic",
+    fov: Annotated[float, typer.Option("--fov", help="Horizontal field of view, degrees (perspective).")] = 25.0,
+    axis_offset: Annotated[float, typer.Option("--axis-offset", help="Axis offset from the centre, px.")] = 0.0,
+    noise: Annotated[float, typer.Option("--noise", help="Sensor noise, grey levels.")] = 0.0,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of textures and noise.")] = 0,
+    force: ForceOption = False,
+    debug: DebugOption = False,
+) -> None:
+    """Render a synthetic clip of a spinning solid with a known rate, and its truth JSON."""
+
+    def job() -> int:
+        try:
+            width, height = (int(v) for v in size.lower().split("x"))
+        except ValueError:
+            raise InputError(f"--size takes WIDTHxHEIGHT such as 640x360; got {size!r}") from None
+        scene = SceneConfig(shape=shape, omega_rad_s=omega, fps=fps, duration_s=duration, width_px=width,
+                            height_px=height, projection=projection, fov_deg=fov, axis_offset_px=axis_offset,
+                            noise_sigma=noise, seed=seed)
+        truth = write_clip(scene, output, force=force)
+        fx, fy = truth["fixation_px"]  # type: ignore[misc]
+        Console(highlight=False).print(
+            f"wrote {output} ({scene.frame_count} frames); truth: omega {abs(omega):g} rad/s, "
+            f"fixation {fx:g},{fy:g}", markup=False)
+        return 0
+
+    _run(debug, job)
+
+
+def main() -> None:
+    """Console-script entry point."""
+    app()

@@ -1,0 +1,176 @@
+"""Reports of an :class:`~rotrate_cli.analysis.Analysis`: Table I CSV, JSON, and a rich table.
+
+The CSV has one row per feature per sample, in the reference paper's Table I layout:
+``feature, frame, time_s, y_<unit>, dy_dt, d2y_dt2, omega2, omega, inlier, reason`` where ``y`` is
+the horizontal offset from the fixation point (the paper's y), ``omega`` in rad/s.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+import tempfile
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+from rich.console import Console
+from rich.table import Table
+
+from rotrate_cli.analysis import Analysis
+from rotrate_cli.errors import OutputError
+
+FORMATS = ("table", "csv", "json")
+TABLE_ROWS = 25  # features listed in the terminal table; the CSV and JSON have them all
+
+
+def _number(value: float, digits: int = 6) -> float | None:
+    return None if value is None or not math.isfinite(value) else round(float(value), digits)
+
+
+def samples_frame(analysis: Analysis) -> pd.DataFrame:
+    """The per-sample table with the report's column names."""
+    table = analysis.samples
+    offset_column = f"y_{analysis.position_unit}"
+    out = pd.DataFrame(
+        {
+            "feature": table["track"].astype(int),
+            "frame": table["frame"].astype(int),
+            "time_s": table["time_s"],
+            offset_column: table["offset_px"],
+            "dy_dt": table["dy_dt"],
+            "d2y_dt2": table["d2y_dt2"],
+            "omega2": table["omega2"],
+            "omega": table["omega_rad_s"],
+            "inlier": table["inlier"].astype(bool),
+            "reason": table["reason"],
+        }
+    )
+    return out.sort_values(["feature", "frame"], kind="stable").reset_index(drop=True)
+
+
+def to_csv(analysis: Analysis) -> str:
+    """Table I layout, one row per feature per sample."""
+    return samples_frame(analysis).to_csv(index=False, float_format="%.6g", lineterminator="\n")
+
+
+def to_dict(analysis: Analysis) -> dict[str, Any]:
+    """The JSON report as a dictionary (omega in rad/s; NaN becomes None)."""
+    features = []
+    for row in analysis.features.itertuples(index=False):
+        features.append(
+            {
+                "feature": int(row.track),
+                "omega": _number(row.omega_rad_s),
+                "omega_se": _number(row.omega_se_rad_s),
+                "inlier": bool(row.inlier),
+                "reason": row.reason,
+                "samples": int(row.samples),
+            }
+        )
+    reasons = Counter(r for r in analysis.features["reason"] if r)
+    return {
+        "video": analysis.source,
+        "method": analysis.method,
+        "fps": _number(analysis.fps),
+        "frames": analysis.frames,
+        "duration_s": _number(analysis.duration_s),
+        "fixation": [_number(v, 3) for v in analysis.fixation_px],
+        "omega": _number(analysis.omega_rad_s),
+        "omega_low": _number(analysis.omega_low_rad_s),
+        "omega_high": _number(analysis.omega_high_rad_s),
+        "rpm": _number(analysis.rpm, 4),
+        "direction": analysis.direction,
+        "tracks_total": analysis.tracks_total,
+        "tracks_used": analysis.tracks_used,
+        "rejected": dict(sorted(reasons.items())),
+        "warnings": list(analysis.warnings),
+        "features": features,
+    }
+
+
+def to_json(analysis: Analysis) -> str:
+    """The JSON report as text, one object."""
+    return json.dumps(to_dict(analysis), indent=2, allow_nan=False) + "\n"
+
+
+def render_table(analysis: Analysis, console: Console) -> None:
+    """A summary and per-feature rows, for the terminal."""
+    interval = (
+        f"[{analysis.omega_low_rad_s:.4f}, {analysis.omega_high_rad_s:.4f}]"
+        if math.isfinite(analysis.omega_low_rad_s) else "n/a"
+    )
+    summary = Table(title=f"rotrate: {analysis.source}", show_header=False, title_justify="left")
+    summary.add_column("quantity", style="bold")
+    summary.add_column("value")
+    summary.add_row("omega", f"{analysis.omega_rad_s:.4f} rad/s  ({analysis.rpm:.3f} rpm)")
+    summary.add_row("95% interval", f"{interval} rad/s")
+    summary.add_row("direction", analysis.direction)
+    fx, fy = analysis.fixation_px
+    summary.add_row("fixation", f"{fx:g}" + ("" if math.isnan(fy) else f", {fy:g}") + f" {analysis.position_unit}")
+    summary.add_row("frames", f"{analysis.frames} over {analysis.duration_s:.2f} s at {analysis.fps:g} fps")
+    reasons = Counter(r for r in analysis.features["reason"] if r)
+    rejected = ", ".join(f"{n} {why}" for why, n in reasons.most_common()) or "none"
+    summary.add_row("features", f"{analysis.tracks_used} used of {analysis.tracks_total}; rejected: {rejected}")
+    summary.add_row("method", analysis.method)
+    for warning in analysis.warnings:
+        summary.add_row("warning", warning)
+    console.print(summary)
+
+    features = analysis.features.copy()
+    features["weight"] = 1.0 / features["omega_se_rad_s"].where(features["omega_se_rad_s"] > 0) ** 2
+    features = features.sort_values(["inlier", "weight"], ascending=[False, False], na_position="last")
+    rows = Table(title="features", title_justify="left")
+    for name in ("feature", "samples", "omega rad/s", "± s.e.", f"range {analysis.position_unit}", "used", "reason"):
+        rows.add_column(name, justify="right" if name not in ("used", "reason") else "left")
+    for row in features.head(TABLE_ROWS).itertuples(index=False):
+        rows.add_row(
+            str(int(row.track)), str(int(row.samples)),
+            "" if not math.isfinite(row.omega_rad_s) else f"{row.omega_rad_s:.4f}",
+            "" if not math.isfinite(row.omega_se_rad_s) else f"{row.omega_se_rad_s:.4f}",
+            f"{row.range:.1f}", "yes" if row.inlier else "no", row.reason,
+        )
+    console.print(rows)
+    if len(features) > TABLE_ROWS:
+        console.print(f"... {len(features) - TABLE_ROWS} more features (all of them with --format csv or json)")
+
+
+def render(analysis: Analysis, fmt: str) -> str:
+    """The report in format ``fmt`` as text (the table without colour)."""
+    if fmt == "csv":
+        return to_csv(analysis)
+    if fmt == "json":
+        return to_json(analysis)
+    buffer = io.StringIO()
+    render_table(analysis, Console(file=buffer, width=110, color_system=None, force_terminal=False))
+    return buffer.getvalue()
+
+
+def check_output_path(path: Path, force: bool) -> None:
+    """Raise OutputError unless ``path`` can be written (and may be replaced)."""
+    if path.is_dir():
+        raise OutputError(f"{path} is a folder; give a file name for --output")
+    if path.exists() and not force:
+        raise OutputError(f"{path} exists; pass --force to replace it")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise OutputError(f"the folder {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise OutputError(f"cannot write into the folder {parent}")
+
+
+def write_text(path: Path, text: str, force: bool) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename: never half a file."""
+    check_output_path(path, force)
+    parent = path.parent if str(path.parent) else Path(".")
+    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=parent)
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as stream:
+            stream.write(text)
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise

@@ -1,0 +1,76 @@
+"""Estimators against analytic trajectories y = A cos(omega t + phi) (+ noise)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rotrate_cli import rates
+
+
+@pytest.mark.parametrize("omega", [0.1, 0.327, 1.0, 3.14])
+@pytest.mark.parametrize("step_s", [1 / 60, 1 / 30, 16 / 30])
+def test_fit_is_exact_on_clean_sinusoids(omega: float, step_s: float) -> None:
+    n = max(8, int(round(2.0 / (omega * step_s))))  # about two radians of arc
+    time_s = np.arange(n) * step_s
+    offset = 80.0 * np.cos(omega * time_s + 0.4)
+    fit = rates.fit_track(time_s, offset)
+    assert fit.omega_rad_s == pytest.approx(omega, rel=1e-7)
+    assert fit.amplitude == pytest.approx(80.0, rel=1e-6)
+    assert fit.rms_residual < 1e-6
+
+
+def test_fit_handles_uneven_times_and_coarse_steps() -> None:
+    # 10 degrees per sample, as the dinosaur turntable; jittered timestamps
+    rng = np.random.default_rng(1)
+    time_s = np.cumsum(rng.uniform(0.8, 1.2, 15))
+    offset = 150.0 * np.sin(0.17453 * time_s - 1.0)
+    assert rates.fit_track(time_s, offset).omega_rad_s == pytest.approx(0.17453, rel=1e-7)
+
+
+def test_fit_with_noise_is_unbiased_and_its_error_is_honest(rng: np.random.Generator) -> None:
+    omega, sigma = 0.6, 0.3
+    time_s = np.arange(90) / 30.0
+    estimates, errors = [], []
+    for _ in range(200):
+        offset = 100.0 * np.cos(omega * time_s - 0.7) + rng.normal(0, sigma, time_s.size)
+        fit = rates.fit_track(time_s, offset)
+        estimates.append(fit.omega_rad_s)
+        errors.append(fit.omega_se_rad_s)
+    estimates = np.array(estimates)
+    assert abs(estimates.mean() - omega) < 3 * estimates.std() / math.sqrt(len(estimates))
+    # the standard error the fit reports matches the scatter within 20%
+    assert np.median(errors) == pytest.approx(estimates.std(), rel=0.2)
+
+
+def test_recurrence_is_exact_and_flags_curving_away() -> None:
+    time_s = np.arange(12) * 0.1
+    assert rates.recurrence_omega(time_s, 5 * np.cos(2.0 * time_s)) == pytest.approx(2.0, rel=1e-9)
+    assert math.isnan(rates.recurrence_omega(time_s, 5 * np.cosh(2.0 * time_s)))
+    assert math.isnan(rates.fit_track(time_s, 5 * np.cosh(2.0 * time_s)).omega_rad_s)
+
+
+def test_paper_samples_are_backward_differences() -> None:
+    time_s = np.arange(5) * 0.5
+    offset = np.array([3.0, 2.8, 2.2, 1.4, 0.3])
+    table = rates.paper_samples(pd.DataFrame({"track": 1, "frame": range(5), "time_s": time_s, "offset_px": offset}))
+    dy = np.diff(offset) / 0.5
+    assert np.allclose(table["dy_dt"].to_numpy()[1:], dy)
+    assert np.allclose(table["d2y_dt2"].to_numpy()[2:], np.diff(dy) / 0.5)
+    assert np.allclose(table["omega2"].to_numpy()[2:], -(np.diff(dy) / 0.5) / offset[2:])
+    assert table["omega_rad_s"].isna().sum() == 2
+
+
+def test_local_samples_give_the_rate_at_every_interior_sample() -> None:
+    time_s = np.arange(40) / 30.0
+    offset = 60.0 * np.cos(0.9 * time_s + 0.2)
+    samples = pd.DataFrame({"track": 3, "frame": range(40), "time_s": time_s, "offset_px": offset})
+    table = rates.fit_samples(samples, rates.fit_tracks(samples))
+    valid = table["omega_rad_s"].dropna()
+    assert len(valid) >= 20
+    assert np.allclose(valid, 0.9, rtol=1e-6)
+    interior = table.dropna(subset=["d2y_dt2"])
+    assert np.allclose(interior["d2y_dt2"], -(0.9**2) * interior["offset_px"], rtol=1e-5, atol=1e-9)
