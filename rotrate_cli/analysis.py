@@ -199,7 +199,8 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale))
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
-    tracks, count = track_frames(prefetch(frames), (info.width_px, info.height_px), config.tracker, notify)
+    run = track_frames(prefetch(frames), (info.width_px, info.height_px), config.tracker, notify)
+    count = run.frames
     if count == 0:
         raise InputError(f"no frame of {source} lies between --start and --end")
     if count < 3:
@@ -208,15 +209,16 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     if expected and config.start_s == 0 and config.end_s is None and count < expected - 1:
         warnings.append(f"decoded {count} of the {expected} frames the file announces; it may be cut off")
 
-    tracks = tracks.assign(track=tracks["track"] + 1)  # features are numbered from 1, as in the paper
+    if run.tracks.empty:
+        raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
+    tracks = run.tracks.assign(track=run.tracks["track"] + 1)  # features are numbered from 1, as in the paper
     offsets = _thin(tracks, config.every).assign(offset_px=lambda t: t["x_px"] - fx)
     result = rates_from_offsets(offsets[["track", "frame", "time_s", "offset_px"]], config.method, config.rejection)
-    times = tracks["time_s"] if not tracks.empty else pd.Series([0.0])
     analysis = Analysis(
         source=str(source),
         fps=info.fps,
         frames=count,
-        duration_s=float(times.max() - times.min()),
+        duration_s=run.last_time_s - run.first_time_s,
         fixation_px=(float(fx), float(fy)),
         method=config.method,
         omega_rad_s=result.combined.omega_rad_s,

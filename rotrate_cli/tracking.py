@@ -298,22 +298,41 @@ class KltTracker:
         return self._store.frame(self.scale)
 
 
+@dataclass(frozen=True)
+class TrackingRun:
+    """What tracking a stream produced.
+
+    Attributes:
+        tracks: ``frame, time_s, track, x_px, y_px`` in full-resolution pixels.
+        frames: frames consumed.
+        first_time_s, last_time_s: times of the first and last frame (NaN when there were none).
+    """
+
+    tracks: pd.DataFrame
+    frames: int
+    first_time_s: float
+    last_time_s: float
+
+
 def track_frames(
     frames: Iterable[Frame],
     frame_size_px: tuple[int, int],
     config: TrackerConfig,
     progress: Callable[[int, float], None] | None = None,
-) -> tuple[pd.DataFrame, int]:
+) -> TrackingRun:
     """Track points through frames whose images are already reduced grey (see :func:`tracking_image`).
 
-    Returns the tidy track table and the number of frames consumed. ``progress`` is called after
-    each frame with the frame count so far and the frame's time in seconds.
+    ``progress`` is called after each frame with the frame count so far and the frame's time.
     """
     tracker = KltTracker(frame_size_px, config)
     count = 0
+    first_time_s = last_time_s = float("nan")
     for frame in frames:
         tracker.update(frame.index, frame.time_s, frame.image)
+        if count == 0:
+            first_time_s = frame.time_s
+        last_time_s = frame.time_s
         count += 1
         if progress is not None:
             progress(count, frame.time_s)
-    return tracker.tracks(), count
+    return TrackingRun(tracker.tracks(), count, first_time_s, last_time_s)
