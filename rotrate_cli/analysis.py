@@ -10,6 +10,7 @@ import math
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -66,10 +67,13 @@ class Analysis:
         direction: ``ccw``, ``cw`` or ``unknown`` (seen from the top end of the axis).
         tracks_total, tracks_used: tracks found, and tracks that went into the result.
         features: one row per track (see :data:`rotrate_cli.outliers.FEATURE_COLUMNS`).
-        samples: one row per track per sample: ``track, frame, time_s, offset_px, dy_dt,
-            d2y_dt2, omega2, omega_rad_s, inlier, reason``.
+        offsets: one row per track per sample: ``track, frame, time_s, offset_px``.
+        rejection: the thresholds the verdicts used.
         warnings: things the user should know that did not stop the run.
         position_unit: the unit of positions and offsets (``px`` for videos).
+
+    ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
+    a long clip's table is large, and most reports do not need it.
     """
 
     source: str
@@ -85,7 +89,8 @@ class Analysis:
     tracks_total: int
     tracks_used: int
     features: pd.DataFrame
-    samples: pd.DataFrame
+    offsets: pd.DataFrame
+    rejection: RejectionConfig = field(default_factory=RejectionConfig)
     warnings: tuple[str, ...] = ()
     position_unit: str = "px"
 
@@ -94,12 +99,18 @@ class Analysis:
         """The combined rate in revolutions per minute."""
         return self.omega_rad_s * 60.0 / (2.0 * math.pi)
 
+    @cached_property
+    def samples(self) -> pd.DataFrame:
+        """One row per track per sample: ``track, frame, time_s, offset_px, dy_dt, d2y_dt2,
+        omega2, omega_rad_s, inlier, reason`` (the paper's Table I columns)."""
+        return sample_rates(self.offsets, self.features, self.method, self.rejection)
+
 
 @dataclass(frozen=True)
 class RateResult:
     """What the rate stages produce from a table of offsets."""
 
-    samples: pd.DataFrame
+    offsets: pd.DataFrame
     features: pd.DataFrame
     combined: Combined
     direction: str
@@ -123,7 +134,7 @@ def _thin(tracks: pd.DataFrame, every: int) -> pd.DataFrame:
     return tracks[(tracks["frame"] - first) % every == 0]
 
 
-def _direction(samples: pd.DataFrame, features: pd.DataFrame) -> str:
+def _direction(offsets: pd.DataFrame, features: pd.DataFrame) -> str:
     """Sense of rotation from the net horizontal travel of the inlier tracks.
 
     An opaque object shows its near side, whose points cross in front of the axis: moving right
@@ -133,7 +144,7 @@ def _direction(samples: pd.DataFrame, features: pd.DataFrame) -> str:
     used = features.loc[features["inlier"], "track"]
     if len(used) < 5:
         return "unknown"
-    part = samples[samples["track"].isin(used)].groupby("track", sort=False)["offset_px"]
+    part = offsets[offsets["track"].isin(used)].groupby("track", sort=False)["offset_px"]
     travel = (part.last() - part.first()).to_numpy()
     total = float(np.abs(travel).sum())
     if total <= 0:
@@ -146,22 +157,29 @@ def _direction(samples: pd.DataFrame, features: pd.DataFrame) -> str:
     return "unknown"
 
 
+def sample_rates(offsets: pd.DataFrame, features: pd.DataFrame, method: str, rejection: RejectionConfig) -> pd.DataFrame:
+    """Per-sample derivatives, rates and verdicts for offsets already judged per track."""
+    if method == "paper":
+        return judge_paper(rates.paper_samples(offsets))[0]
+    rate = dict(zip(features["track"].astype(int), features["omega_rad_s"], strict=True))
+    return flag_samples(rates.fit_samples(offsets, rate), features, rejection)
+
+
 def rates_from_offsets(offsets: pd.DataFrame, method: str, rejection: RejectionConfig) -> RateResult:
-    """Per-sample rates, per-track verdicts and the combined rate.
+    """Per-track rates and verdicts, and the combined rate.
 
     ``offsets`` has columns ``track, frame, time_s, offset_px``, one row per sample.
     """
-    offsets = offsets.sort_values(["track", "time_s"], kind="stable").reset_index(drop=True)
+    if not (offsets["track"].is_monotonic_increasing and offsets.groupby("track")["time_s"].is_monotonic_increasing.all()):
+        offsets = offsets.sort_values(["track", "time_s"], kind="stable").reset_index(drop=True)
     if method == "paper":
-        samples, features = judge_paper(rates.paper_samples(offsets))
+        _, features = judge_paper(rates.paper_samples(offsets))
         combined = combine_plain(features.loc[features["inlier"], "omega_rad_s"].to_numpy())
     else:
-        fits = rates.fit_tracks(offsets)
-        features = judge_fits(offsets, fits, rejection)
-        samples = flag_samples(rates.fit_samples(offsets, fits), features, rejection)
+        features = judge_fits(offsets, rates.fit_tracks(offsets), rejection)
         used = features[features["inlier"]]
         combined = combine(used["omega_rad_s"].to_numpy(), used["omega_se_rad_s"].to_numpy())
-    return RateResult(samples, features, combined, _direction(samples, features))
+    return RateResult(offsets, features, combined, _direction(offsets, features))
 
 
 def _no_result_message(features: pd.DataFrame) -> str:
@@ -209,16 +227,23 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     if expected and config.start_s == 0 and config.end_s is None and count < expected - 1:
         warnings.append(f"decoded {count} of the {expected} frames the file announces; it may be cut off")
 
+    duration_s = run.last_time_s - run.first_time_s
     if run.tracks.empty:
         raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
-    tracks = run.tracks.assign(track=run.tracks["track"] + 1)  # features are numbered from 1, as in the paper
-    offsets = _thin(tracks, config.every).assign(offset_px=lambda t: t["x_px"] - fx)
-    result = rates_from_offsets(offsets[["track", "frame", "time_s", "offset_px"]], config.method, config.rejection)
+    tracks = _thin(run.tracks, config.every)
+    offsets = pd.DataFrame({
+        "track": tracks["track"].to_numpy() + 1,  # features are numbered from 1, as in the paper
+        "frame": tracks["frame"].to_numpy(),
+        "time_s": tracks["time_s"].to_numpy(),
+        "offset_px": tracks["x_px"].to_numpy(dtype=np.float64) - fx,
+    })
+    del run, tracks  # the offsets are all that is needed from here on: keep the peak low
+    result = rates_from_offsets(offsets, config.method, config.rejection)
     analysis = Analysis(
         source=str(source),
         fps=info.fps,
         frames=count,
-        duration_s=run.last_time_s - run.first_time_s,
+        duration_s=duration_s,
         fixation_px=(float(fx), float(fy)),
         method=config.method,
         omega_rad_s=result.combined.omega_rad_s,
@@ -228,7 +253,8 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         tracks_total=int(len(result.features)),
         tracks_used=result.combined.tracks_used,
         features=result.features,
-        samples=result.samples,
+        offsets=result.offsets,
+        rejection=config.rejection,
         warnings=tuple(warnings),
     )
     if analysis.tracks_used == 0:
@@ -289,7 +315,8 @@ def analyze_tracks(
         tracks_total=int(len(result.features)),
         tracks_used=result.combined.tracks_used,
         features=result.features,
-        samples=result.samples,
+        offsets=result.offsets,
+        rejection=rules,
         position_unit=position_unit,
     )
     if analysis.tracks_used == 0:

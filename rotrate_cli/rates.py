@@ -21,6 +21,7 @@ Two families are offered:
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,12 +52,6 @@ class TrackFit:
 _FAILED = TrackFit(math.nan, math.nan, math.nan, math.nan, math.nan)
 
 
-def _linear_amplitudes(time_s: np.ndarray, offset: np.ndarray, omega: float) -> tuple[np.ndarray, np.ndarray]:
-    basis = np.column_stack([np.cos(omega * time_s), np.sin(omega * time_s)])
-    coef, *_ = np.linalg.lstsq(basis, offset, rcond=None)
-    return coef, offset - basis @ coef
-
-
 def recurrence_omega(time_s: np.ndarray, offset: np.ndarray) -> float:
     """Closed-form first guess from the exact three-term recurrence at the median step.
 
@@ -77,53 +72,17 @@ def recurrence_omega(time_s: np.ndarray, offset: np.ndarray) -> float:
     return math.acos(cosine) / dt
 
 
-def fit_track(time_s: np.ndarray, offset: np.ndarray, iterations: int = 30) -> TrackFit:
+def fit_track(time_s: np.ndarray, offset: np.ndarray) -> TrackFit:
     """Fit ``offset = a cos(omega t) + b sin(omega t)`` to one track by Gauss-Newton.
 
-    ``time_s`` may be unevenly spaced. The start comes from :func:`recurrence_omega`, refined
-    over ``(a, b, omega)`` jointly. The standard error is the usual ``s^2 (J^T J)^-1`` one.
+    ``time_s`` may be unevenly spaced (centred internally). The start comes from the exact
+    three-term recurrence (see :func:`recurrence_omega`) and a few trial rates around it; the
+    standard error is the usual ``s^2 (J^T J)^-1`` one, infinite when the track does not
+    determine omega.
     """
-    n = len(offset)
-    if n < 4:
-        return _FAILED
-    t = time_s - time_s.mean()  # centring decorrelates omega from the phase
-    omega = recurrence_omega(time_s, offset)
-    if not math.isfinite(omega) or omega <= 0:
-        return _FAILED
-    # A few trial rates around the first guess guard against a noisy start.
-    candidates = omega * np.array([0.7, 0.85, 1.0, 1.15, 1.3])
-    omega = float(min(candidates, key=lambda w: float(np.sum(_linear_amplitudes(t, offset, w)[1] ** 2))))
-    coef, residual = _linear_amplitudes(t, offset, omega)
-    a, b = coef
-    for _ in range(iterations):
-        cos_wt, sin_wt = np.cos(omega * t), np.sin(omega * t)
-        model = a * cos_wt + b * sin_wt
-        residual = offset - model
-        jacobian = np.column_stack([cos_wt, sin_wt, t * (-a * sin_wt + b * cos_wt)])
-        step, *_ = np.linalg.lstsq(jacobian, residual, rcond=None)
-        a, b, omega = a + step[0], b + step[1], omega + step[2]
-        if abs(step[2]) < 1e-12 * max(1.0, abs(omega)):
-            break
-    cos_wt, sin_wt = np.cos(omega * t), np.sin(omega * t)
-    residual = offset - (a * cos_wt + b * sin_wt)
-    jacobian = np.column_stack([cos_wt, sin_wt, t * (-a * sin_wt + b * cos_wt)])
-    rss = float(residual @ residual)
-    dof = max(n - 3, 1)
-    try:
-        covariance = np.linalg.inv(jacobian.T @ jacobian) * (rss / dof)
-        se = math.sqrt(max(float(covariance[2, 2]), 0.0))
-    except np.linalg.LinAlgError:
-        se = math.inf
-    omega = abs(float(omega))
-    if not math.isfinite(omega):
-        return _FAILED
-    return TrackFit(
-        omega_rad_s=omega,
-        omega_se_rad_s=se,
-        rms_residual=math.sqrt(rss / n),
-        amplitude=float(math.hypot(a, b)),
-        arc_rad=omega * float(time_s[-1] - time_s[0]),
-    )
+    time_s = np.asarray(time_s, dtype=float)[None, :]
+    offset = np.asarray(offset, dtype=float)[None, :]
+    return _fit_batch(time_s, offset, np.ones_like(time_s, dtype=bool))[0]
 
 
 def paper_samples(samples: pd.DataFrame) -> pd.DataFrame:
@@ -166,11 +125,12 @@ def _track_slices(tracks: np.ndarray) -> list[slice]:
     return [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
-def fit_samples(samples: pd.DataFrame, fits: dict[int, TrackFit]) -> pd.DataFrame:
+def fit_samples(samples: pd.DataFrame, omega_rad_s: dict[int, float]) -> pd.DataFrame:
     """Per-sample values for the fit method: central differences at lag ``m`` and the exact
     discrete rate ``omega = arccos((y[k+m] + y[k-m]) / (2 y[k])) / (m dt)``.
 
-    ``samples`` is sorted by track, then time. ``dy_dt`` is the central difference at that lag
+    ``samples`` is sorted by track, then time; ``omega_rad_s`` holds each track's fitted rate,
+    which sets its lag. ``dy_dt`` is the central difference at that lag
     and ``d2y_dt2 = -omega2 * y``, the second derivative of the sinusoid through the three
     samples; rows near a track's ends have NaN.
     """
@@ -186,8 +146,8 @@ def fit_samples(samples: pd.DataFrame, fits: dict[int, TrackFit]) -> pd.DataFram
         n = len(offset)
         if n < 3:
             continue
-        fit = fits.get(int(tracks[part.start]), _FAILED)
-        lag = local_lag(fit.omega_rad_s * float(np.median(np.diff(time_s))), n)
+        rate = omega_rad_s.get(int(tracks[part.start]), math.nan)
+        lag = local_lag(rate * float(np.median(np.diff(time_s))), n)
         if n <= 2 * lag:
             continue
         k = np.arange(lag, n - lag)
@@ -206,10 +166,120 @@ def fit_samples(samples: pd.DataFrame, fits: dict[int, TrackFit]) -> pd.DataFram
     return table
 
 
+#: Elements per padded batch in :func:`fit_tracks`: bounds memory whatever the clip's length.
+_BATCH_ELEMENTS = 50_000
+
+
+def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterations: int = 20) -> list[TrackFit]:
+    """Gauss-Newton fits of ``a cos(wt) + b sin(wt)`` to many padded tracks at once.
+
+    Rows are tracks; ``mask`` marks real samples (padding is zero-weighted). Same model,
+    start and standard error as :func:`fit_track`, vectorised over tracks.
+    """
+    weight = mask.astype(float)
+    n = weight.sum(axis=1)
+    t_mean = (time_s * weight).sum(axis=1) / n
+    t = (time_s - t_mean[:, None]) * weight
+    y = offset * weight
+    # first guess: the exact recurrence y[k-1] + y[k+1] = 2 cos(w dt) y[k], least squares
+    triple = weight[:, :-2] * weight[:, 1:-1] * weight[:, 2:]
+    middle = y[:, 1:-1] * triple
+    cosine = (middle * (y[:, :-2] + y[:, 2:])).sum(axis=1) / np.maximum(2 * (middle * middle).sum(axis=1), 1e-300)
+    steps = np.where(weight[:, 1:] * weight[:, :-1] > 0, np.diff(time_s, axis=1), np.nan)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows: single-sample tracks
+        dt = np.nanmedian(steps, axis=1)
+        omega = np.where(cosine <= -1.0, np.pi / dt, np.arccos(np.clip(cosine, -1.0, 1.0)) / dt)
+    valid = (n >= 4) & np.isfinite(omega) & (omega > 0) & (cosine < 1.0)
+    omega = np.where(valid, omega, 1.0)
+
+    def amplitudes(w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        c, s_ = np.cos(w[:, None] * t) * weight, np.sin(w[:, None] * t) * weight
+        cc, ss, cs = (c * c).sum(1), (s_ * s_).sum(1), (c * s_).sum(1)
+        cy, sy = (c * y).sum(1), (s_ * y).sum(1)
+        det = cc * ss - cs * cs
+        det = np.where(np.abs(det) > 1e-300, det, 1e-300)
+        a, b = (ss * cy - cs * sy) / det, (cc * sy - cs * cy) / det
+        rss = ((y - a[:, None] * c - b[:, None] * s_) ** 2).sum(1)
+        return a, b, rss
+
+    # a few trial rates around the first guess guard against a noisy start
+    best_rss = np.full(len(omega), np.inf)
+    best = omega.copy()
+    for factor in (0.7, 0.85, 1.0, 1.15, 1.3):
+        _, _, rss = amplitudes(omega * factor)
+        better = rss < best_rss
+        best = np.where(better, omega * factor, best)
+        best_rss = np.where(better, rss, best_rss)
+    omega = best
+    a, b, _ = amplitudes(omega)
+    params = np.column_stack([a, b, omega])
+    ridge = 1e-12
+    for _ in range(iterations):
+        w = params[:, 2:3]
+        c, s_ = np.cos(w * t) * weight, np.sin(w * t) * weight
+        residual = y - params[:, 0:1] * c - params[:, 1:2] * s_
+        jacobian = np.stack([c, s_, t * (-params[:, 0:1] * s_ + params[:, 1:2] * c)], axis=2)
+        jtj = np.einsum("kli,klj->kij", jacobian, jacobian)
+        jtr = np.einsum("kli,kl->ki", jacobian, residual)
+        jtj += ridge * np.eye(3) * np.trace(jtj, axis1=1, axis2=2)[:, None, None] + 1e-300 * np.eye(3)
+        step = np.linalg.solve(jtj, jtr[:, :, None])[:, :, 0]
+        step[~np.isfinite(step).all(axis=1)] = 0.0
+        params += step
+        if np.all(np.abs(step[:, 2]) <= 1e-12 * np.maximum(1.0, np.abs(params[:, 2]))):
+            break
+    w = params[:, 2:3]
+    c, s_ = np.cos(w * t) * weight, np.sin(w * t) * weight
+    residual = y - params[:, 0:1] * c - params[:, 1:2] * s_
+    jacobian = np.stack([c, s_, t * (-params[:, 0:1] * s_ + params[:, 1:2] * c)], axis=2)
+    jtj = np.einsum("kli,klj->kij", jacobian, jacobian)
+    rss = (residual**2).sum(1)
+    with np.errstate(all="ignore"):
+        # a (near-)singular J^T J means omega is not determined by the track: infinite error
+        condition = np.linalg.cond(jtj) if len(jtj) else np.empty(0)
+        safe = np.where((condition < 1e12)[:, None, None], jtj, np.eye(3))
+        inverse_22 = np.where(condition < 1e12, np.linalg.inv(safe)[:, 2, 2], np.inf)
+        se = np.sqrt(np.maximum(inverse_22 * rss / np.maximum(n - 3, 1), 0.0))
+    duration = np.where(mask, time_s, -np.inf).max(1) - np.where(mask, time_s, np.inf).min(1)
+    fits = []
+    for k in range(len(omega)):
+        w_k = abs(float(params[k, 2]))
+        if not valid[k] or not math.isfinite(w_k) or w_k == 0:
+            fits.append(_FAILED)
+            continue
+        fits.append(TrackFit(w_k, float(se[k]), math.sqrt(float(rss[k]) / n[k]), float(math.hypot(params[k, 0], params[k, 1])),
+                             w_k * float(duration[k])))
+    return fits
+
+
 def fit_tracks(samples: pd.DataFrame) -> dict[int, TrackFit]:
     """Fit every track of ``samples`` (sorted by track then time; columns ``track, time_s,
-    offset_px``); keyed by track."""
+    offset_px``); keyed by track. Tracks are fitted in padded batches of similar length."""
     tracks = samples["track"].to_numpy()
     times = samples["time_s"].to_numpy(dtype=float)
     offsets = samples["offset_px"].to_numpy(dtype=float)
-    return {int(tracks[part.start]): fit_track(times[part], offsets[part]) for part in _track_slices(tracks)}
+    parts = sorted(_track_slices(tracks), key=lambda p: p.stop - p.start)
+    fits: dict[int, TrackFit] = {}
+    index = 0
+    while index < len(parts):
+        longest = parts[index].stop - parts[index].start
+        batch = [parts[index]]
+        index += 1
+        while index < len(parts):
+            longest_next = parts[index].stop - parts[index].start
+            if (len(batch) + 1) * longest_next > _BATCH_ELEMENTS:
+                break
+            batch.append(parts[index])
+            longest = longest_next
+            index += 1
+        time_s = np.zeros((len(batch), longest))
+        offset = np.zeros((len(batch), longest))
+        mask = np.zeros((len(batch), longest), dtype=bool)
+        for row, part in enumerate(batch):
+            size = part.stop - part.start
+            time_s[row, :size] = times[part]
+            offset[row, :size] = offsets[part]
+            mask[row, :size] = True
+        for part, fit in zip(batch, _fit_batch(time_s, offset, mask), strict=True):
+            fits[int(tracks[part.start])] = fit
+    return fits

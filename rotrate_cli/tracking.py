@@ -111,21 +111,28 @@ class _Tracks:
         self.points.append(points.astype(np.float32, copy=True))
 
     def frame(self, scale: float) -> pd.DataFrame:
+        """The positions as a tidy table sorted by track then frame, in full-resolution pixels.
+
+        Positions stay float32 (the tracker's own precision, ~1e-3 px) to keep long clips small.
+        """
         if not self.ids:
-            return pd.DataFrame({name: pd.Series(dtype="float64") for name in TRACK_COLUMNS}).astype(
-                {"frame": "int32", "track": "int32"}
-            )
-        points = np.concatenate(self.points).astype(np.float64) / scale
-        table = pd.DataFrame(
-            {
-                "frame": np.concatenate(self.frames),
-                "time_s": np.concatenate(self.times),
-                "track": np.concatenate(self.ids),
-                "x_px": points[:, 0],
-                "y_px": points[:, 1],
-            }
-        )
-        return table.sort_values(["track", "frame"], kind="stable").reset_index(drop=True)
+            return pd.DataFrame({
+                "frame": pd.Series(dtype="int32"), "time_s": pd.Series(dtype="float64"),
+                "track": pd.Series(dtype="int32"), "x_px": pd.Series(dtype="float32"),
+                "y_px": pd.Series(dtype="float32"),
+            })
+        ids = np.concatenate(self.ids)
+        frames = np.concatenate(self.frames)
+        order = np.lexsort((frames, ids))
+        points = np.concatenate(self.points)[order]
+        points /= np.float32(scale)
+        return pd.DataFrame({
+            "frame": frames[order],
+            "time_s": np.concatenate(self.times)[order],
+            "track": ids[order],
+            "x_px": points[:, 0],
+            "y_px": points[:, 1],
+        })
 
 
 class KltTracker:
@@ -155,6 +162,7 @@ class KltTracker:
         self._last_change = np.full(self._seed_mask.shape, -np.inf, np.float32)  # when each pixel last changed, s
         self._points = np.empty((0, 2), np.float32)
         self._ids = np.empty(0, np.int32)
+        self._velocity = np.empty((0, 2), np.float32)  # last displacement per frame, for prediction
         self._anchor = np.empty((0, 2), np.float32)  # where each point stood static_window_s ago
         self._anchor_time = np.empty(0, np.float64)
         self._next_id = 0
@@ -187,7 +195,11 @@ class KltTracker:
 
     def _advance(self, grey: np.ndarray) -> None:
         start = self._points.reshape(-1, 1, 2)
-        moved, status, _ = cv2.calcOpticalFlowPyrLK(self._prev, grey, start, None, **self._lk)
+        # constant-velocity prediction: the search starts near the answer, so large or fast
+        # motions converge in few iterations
+        guess = (self._points + self._velocity).reshape(-1, 1, 2)
+        moved, status, _ = cv2.calcOpticalFlowPyrLK(self._prev, grey, start, guess, flags=cv2.OPTFLOW_USE_INITIAL_FLOW,
+                                                    **self._lk)
         back, status_back, _ = cv2.calcOpticalFlowPyrLK(grey, self._prev, moved, None, **self._lk)
         moved = moved.reshape(-1, 2)
         round_trip_px = np.linalg.norm(back.reshape(-1, 2) - self._points, axis=1)
@@ -201,6 +213,7 @@ class KltTracker:
             & (moved[:, 0] <= width - 1)
             & (moved[:, 1] <= height - 1)
         )
+        self._velocity = (moved - self._points)[keep]
         self._points = moved[keep]
         self._ids = self._ids[keep]
         self._anchor = self._anchor[keep]
@@ -219,7 +232,7 @@ class KltTracker:
         self._anchor[moving_due] = self._points[moving_due]
         self._anchor_time[moving_due] = time_s
         keep = ~static
-        self._points, self._ids = self._points[keep], self._ids[keep]
+        self._points, self._ids, self._velocity = self._points[keep], self._ids[keep], self._velocity[keep]
         self._anchor, self._anchor_time = self._anchor[keep], self._anchor_time[keep]
 
     def _update_activity(self, grey: np.ndarray, time_s: float) -> np.ndarray | None:
@@ -256,7 +269,7 @@ class KltTracker:
         count = integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0]
         area = np.maximum((x1 - x0) * (y1 - y0), 1)
         keep = count / area <= self.config.max_static_fraction
-        self._points, self._ids = self._points[keep], self._ids[keep]
+        self._points, self._ids, self._velocity = self._points[keep], self._ids[keep], self._velocity[keep]
         self._anchor, self._anchor_time = self._anchor[keep], self._anchor_time[keep]
 
     def _seed(self, grey: np.ndarray, time_s: float, moving: np.ndarray) -> None:
@@ -290,6 +303,7 @@ class KltTracker:
         self._next_id += len(corners)
         self._points = np.vstack([self._points, corners])
         self._ids = np.concatenate([self._ids, new_ids])
+        self._velocity = np.vstack([self._velocity, np.zeros_like(corners)])
         self._anchor = np.vstack([self._anchor, corners])
         self._anchor_time = np.concatenate([self._anchor_time, np.full(len(corners), time_s)])
 

@@ -68,7 +68,7 @@ def test_local_samples_give_the_rate_at_every_interior_sample() -> None:
     time_s = np.arange(40) / 30.0
     offset = 60.0 * np.cos(0.9 * time_s + 0.2)
     samples = pd.DataFrame({"track": 3, "frame": range(40), "time_s": time_s, "offset_px": offset})
-    table = rates.fit_samples(samples, rates.fit_tracks(samples))
+    table = rates.fit_samples(samples, {3: rates.fit_tracks(samples)[3].omega_rad_s})
     valid = table["omega_rad_s"].dropna()
     assert len(valid) >= 20
     assert np.allclose(valid, 0.9, rtol=1e-6)
