@@ -109,7 +109,7 @@ def main() -> None:
     decode = statistics.median(decode_s)
     analyze = statistics.median(analyze_s)
     peak_long = statistics.median(r["peak_mib"] for r in long_runs)
-    print("rotrate benchmark: 1280x720 MPEG-4, 30 fps, cylinder turning at %.4f rad/s" % truth["omega"])
+    print(f"rotrate benchmark: 1280x720 MPEG-4, 30 fps, cylinder turning at {truth['omega']:.4f} rad/s")
     print(f"  clip: {frames} frames ({frames / FPS:.0f} s); 4x clip: {long_runs[0]['frames']} frames")
     print(f"  decode only : {frames / decode:8.1f} frames/s  (median of {args.rounds})")
     print(f"  analyze     : {frames / analyze:8.1f} frames/s  (median of {args.rounds})")

@@ -19,7 +19,15 @@ import pandas as pd
 from rotrate_cli import rates
 from rotrate_cli.decode import FrameSource, prefetch
 from rotrate_cli.errors import InputError, NoResultError
-from rotrate_cli.outliers import Combined, RejectionConfig, combine, combine_plain, flag_samples, judge_fits, judge_paper
+from rotrate_cli.outliers import (
+    Combined,
+    RejectionConfig,
+    combine,
+    combine_plain,
+    flag_samples,
+    judge_fits,
+    judge_paper,
+)
 from rotrate_cli.tracking import TrackerConfig, track_frames, tracking_image, tracking_scale
 
 #: Progress callback: (frames done, frames expected or None).
@@ -157,7 +165,9 @@ def _direction(offsets: pd.DataFrame, features: pd.DataFrame) -> str:
     return "unknown"
 
 
-def sample_rates(offsets: pd.DataFrame, features: pd.DataFrame, method: str, rejection: RejectionConfig) -> pd.DataFrame:
+def sample_rates(
+    offsets: pd.DataFrame, features: pd.DataFrame, method: str, rejection: RejectionConfig
+) -> pd.DataFrame:
     """Per-sample derivatives, rates and verdicts for offsets already judged per track."""
     if method == "paper":
         return judge_paper(rates.paper_samples(offsets))[0]
@@ -170,7 +180,8 @@ def rates_from_offsets(offsets: pd.DataFrame, method: str, rejection: RejectionC
 
     ``offsets`` has columns ``track, frame, time_s, offset_px``, one row per sample.
     """
-    if not (offsets["track"].is_monotonic_increasing and offsets.groupby("track")["time_s"].is_monotonic_increasing.all()):
+    ordered = offsets["track"].is_monotonic_increasing
+    if not (ordered and offsets.groupby("track")["time_s"].is_monotonic_increasing.all()):
         offsets = offsets.sort_values(["track", "time_s"], kind="stable").reset_index(drop=True)
     if method == "paper":
         _, features = judge_paper(rates.paper_samples(offsets))
@@ -187,7 +198,8 @@ def _no_result_message(features: pd.DataFrame) -> str:
         return "no point could be tracked; check that the object moves and has texture, or pass --roi"
     counts = Counter(features["reason"])
     detail = ", ".join(f"{n} {why}" for why, n in counts.most_common())
-    return f"no track gave a trustworthy rate ({detail}); try a longer clip, --roi around the object, or check --fixation"
+    return (f"no track gave a trustworthy rate ({detail}); "
+            "try a longer clip, --roi around the object, or check --fixation")
 
 
 def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None = None) -> Analysis:
@@ -262,6 +274,16 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     return analysis
 
 
+def _rate_from_times(table: pd.DataFrame) -> float:
+    """Frames per second implied by a tracks table's ``frame`` and ``time_s`` columns (NaN if unknown)."""
+    pairs = table.drop_duplicates("frame").sort_values("frame")
+    frame_steps = np.diff(pairs["frame"].to_numpy())
+    time_steps = np.diff(pairs["time_s"].to_numpy())
+    if len(frame_steps) == 0 or not (time_steps > 0).all():
+        return math.nan
+    return float(np.median(frame_steps / time_steps))
+
+
 def analyze_tracks(
     tracks: pd.DataFrame,
     fixation: float,
@@ -293,9 +315,7 @@ def analyze_tracks(
     elif table["time_s"].isna().any():
         raise InputError("the tracks have no time_s column; pass --fps")
     else:
-        spacing = np.diff(np.sort(table["frame"].unique()))
-        elapsed = table["time_s"].max() - table["time_s"].min()
-        fps = float(np.median(spacing)) / float(np.median(np.diff(np.sort(table["time_s"].unique())))) if len(spacing) and elapsed > 0 else math.nan
+        fps = _rate_from_times(table)
     if table.groupby("track")["time_s"].apply(lambda t: bool((np.diff(t.to_numpy()) <= 0).any())).any():
         raise InputError("times must increase along each track")
     offsets = _thin(table, every).assign(offset_px=lambda t: t["position"] - fixation)

@@ -121,7 +121,9 @@ def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | N
 def analyze_command(
     video: Annotated[str, typer.Argument(help="Video file, image folder, or printf pattern like frames/img.%03d.png.")],
     fixation: Annotated[str, typer.Option("--fixation", help="X,Y pixel of a point on the rotation axis.")],
-    fps: Annotated[float | None, typer.Option("--fps", help="Frame rate; overrides the file's, required for images.")] = None,
+    fps: Annotated[
+        float | None, typer.Option("--fps", help="Frame rate; overrides the file's, required for images.")
+    ] = None,
     start: Annotated[float, typer.Option("--start", help="Start time, s.")] = 0.0,
     end: Annotated[float | None, typer.Option("--end", help="End time, s.")] = None,
     roi: Annotated[str | None, typer.Option("--roi", help="X,Y,W,H: seed points only in this box.")] = None,
@@ -189,7 +191,9 @@ def omega_command(
 def synth_command(
     output: Annotated[Path, typer.Argument(help="Video to write (.mp4); the truth goes beside it as .json.")],
     shape: Annotated[str, typer.Option("--shape", help=f"One of {', '.join(SHAPES)}.")] = "box",
-    omega: Annotated[float, typer.Option("--omega", help="Rate in rad/s; negative turns clockwise seen from above.")] = 0.5,
+    omega: Annotated[
+        float, typer.Option("--omega", help="Rate in rad/s; negative turns clockwise seen from above.")
+    ] = 0.5,
     fps: Annotated[float, typer.Option("--fps", help="Frames per second.")] = 30.0,
     duration: Annotated[float, typer.Option("--duration", help="Length, s.")] = 5.0,
     size: Annotated[str, typer.Option("--size", help="WIDTHxHEIGHT in pixels.")] = "640x360",

@@ -97,7 +97,9 @@ def _folder_files(folder: Path) -> list[Path]:
 
 def _check_fps(fps: float | None, what: str) -> None:
     if fps is not None and not (MIN_FPS <= fps <= MAX_FPS and math.isfinite(fps)):
-        raise InputError(f"{what} frame rate {fps} is not usable; pass --fps with a value between {MIN_FPS} and {MAX_FPS:g}")
+        raise InputError(
+            f"{what} frame rate {fps} is not usable; pass --fps with a value between {MIN_FPS} and {MAX_FPS:g}"
+        )
 
 
 class FrameSource:
@@ -141,7 +143,9 @@ class FrameSource:
         try:
             ok, first = capture.read()
             if not ok or first is None:
-                raise InputError(f"could not decode {self._source} as a video; is it a video file (mp4, mov, avi, mkv)?")
+                raise InputError(
+                    f"could not decode {self._source} as a video; is it a video file (mp4, mov, avi, mkv)?"
+                )
             container_fps = float(capture.get(cv2.CAP_PROP_FPS) or 0.0)
             count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         finally:

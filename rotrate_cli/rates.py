@@ -247,8 +247,8 @@ def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterati
         if not valid[k] or not math.isfinite(w_k) or w_k == 0:
             fits.append(_FAILED)
             continue
-        fits.append(TrackFit(w_k, float(se[k]), math.sqrt(float(rss[k]) / n[k]), float(math.hypot(params[k, 0], params[k, 1])),
-                             w_k * float(duration[k])))
+        amplitude = float(math.hypot(params[k, 0], params[k, 1]))
+        fits.append(TrackFit(w_k, float(se[k]), math.sqrt(float(rss[k]) / n[k]), amplitude, w_k * float(duration[k])))
     return fits
 
 

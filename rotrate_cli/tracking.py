@@ -284,17 +284,21 @@ class KltTracker:
         radius = max(1, int(self.config.min_distance_px))
         for x, y in self._points:
             cv2.circle(mask, (int(round(x)), int(round(y))), radius, 0, -1)
+        # corner detection costs in proportion to the area searched: search the moving box only
+        left, top, box_w, box_h = cv2.boundingRect(mask)
+        if box_w == 0 or box_h == 0:
+            return
         corners = cv2.goodFeaturesToTrack(
-            grey,
+            grey[top:top + box_h, left:left + box_w],
             maxCorners=wanted,
             qualityLevel=self.config.quality_level,
             minDistance=self.config.min_distance_px,
-            mask=mask,
+            mask=mask[top:top + box_h, left:left + box_w],
             blockSize=5,
         )
         if corners is None:
             return
-        corners = corners.reshape(-1, 2).astype(np.float32)
+        corners = corners.reshape(-1, 2).astype(np.float32) + np.float32([left, top])
         corners = cv2.cornerSubPix(
             grey, corners.reshape(-1, 1, 2), (3, 3), (-1, -1),
             (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03),
