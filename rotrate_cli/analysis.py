@@ -149,11 +149,16 @@ def _direction(offsets: pd.DataFrame, features: pd.DataFrame) -> str:
     means anticlockwise seen from above. Far-side points (a transparent object, a turntable's top
     seen from above) travel the other way, so the answer is given only on a clear majority.
     """
-    used = features.loc[features["inlier"], "track"]
+    used = set(features.loc[features["inlier"], "track"].astype(int))
     if len(used) < 5:
         return "unknown"
-    part = offsets[offsets["track"].isin(used)].groupby("track", sort=False)["offset_px"]
-    travel = (part.last() - part.first()).to_numpy()
+    # offsets are sorted by track then time: a track's first and last rows bound its slice
+    tracks = offsets["track"].to_numpy()
+    values = offsets["offset_px"].to_numpy()
+    starts = np.flatnonzero(np.r_[True, tracks[1:] != tracks[:-1]])
+    ends = np.r_[starts[1:], len(tracks)] - 1
+    keep = np.array([int(t) in used for t in tracks[starts]], dtype=bool)
+    travel = values[ends[keep]] - values[starts[keep]]
     total = float(np.abs(travel).sum())
     if total <= 0:
         return "unknown"
@@ -180,8 +185,9 @@ def rates_from_offsets(offsets: pd.DataFrame, method: str, rejection: RejectionC
 
     ``offsets`` has columns ``track, frame, time_s, offset_px``, one row per sample.
     """
-    ordered = offsets["track"].is_monotonic_increasing
-    if not (ordered and offsets.groupby("track")["time_s"].is_monotonic_increasing.all()):
+    track_step = np.diff(offsets["track"].to_numpy())
+    time_step = np.diff(offsets["time_s"].to_numpy())
+    if not ((track_step > 0) | ((track_step == 0) & (time_step > 0))).all():
         offsets = offsets.sort_values(["track", "time_s"], kind="stable").reset_index(drop=True)
     if method == "paper":
         _, features = judge_paper(rates.paper_samples(offsets))

@@ -167,7 +167,7 @@ def fit_samples(samples: pd.DataFrame, omega_rad_s: dict[int, float]) -> pd.Data
 
 
 #: Elements per padded batch in :func:`fit_tracks`: bounds memory whatever the clip's length.
-_BATCH_ELEMENTS = 50_000
+_BATCH_ELEMENTS = 20_000
 
 
 def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterations: int = 20) -> list[TrackFit]:

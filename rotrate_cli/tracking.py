@@ -94,24 +94,26 @@ def tracking_image(image: np.ndarray, scale: float) -> np.ndarray:
 
 
 class _Tracks:
-    """Append-only store of tracked positions, compact (one small array set per frame)."""
+    """Append-only store of tracked positions, compact: per frame one id array and one float32
+    position array (16 bytes a point), plus the frame's index and time once."""
 
     def __init__(self) -> None:
-        self.frames: list[np.ndarray] = []
-        self.times: list[np.ndarray] = []
+        self.frame_index: list[int] = []
+        self.frame_time_s: list[float] = []
         self.ids: list[np.ndarray] = []
         self.points: list[np.ndarray] = []
 
     def add(self, frame: int, time_s: float, ids: np.ndarray, points: np.ndarray) -> None:
         if len(ids) == 0:
             return
-        self.frames.append(np.full(len(ids), frame, dtype=np.int32))
-        self.times.append(np.full(len(ids), time_s, dtype=np.float64))
+        self.frame_index.append(frame)
+        self.frame_time_s.append(time_s)
         self.ids.append(ids.astype(np.int32, copy=True))
         self.points.append(points.astype(np.float32, copy=True))
 
     def frame(self, scale: float) -> pd.DataFrame:
-        """The positions as a tidy table sorted by track then frame, in full-resolution pixels.
+        """The positions as a tidy table sorted by track then frame, in full-resolution pixels,
+        emptying the store as it goes (so a long clip's positions are not held twice).
 
         Positions stay float32 (the tracker's own precision, ~1e-3 px) to keep long clips small.
         """
@@ -121,18 +123,28 @@ class _Tracks:
                 "track": pd.Series(dtype="int32"), "x_px": pd.Series(dtype="float32"),
                 "y_px": pd.Series(dtype="float32"),
             })
+        counts = np.array([len(ids) for ids in self.ids])
+        row_slot = np.repeat(np.arange(len(counts), dtype=np.int32), counts)
         ids = np.concatenate(self.ids)
-        frames = np.concatenate(self.frames)
-        order = np.lexsort((frames, ids))
-        points = np.concatenate(self.points)[order]
-        points /= np.float32(scale)
-        return pd.DataFrame({
-            "frame": frames[order],
-            "time_s": np.concatenate(self.times)[order],
-            "track": ids[order],
-            "x_px": points[:, 0],
-            "y_px": points[:, 1],
+        self.ids.clear()
+        order = np.argsort(ids, kind="stable")  # rows are stored frame by frame: stable keeps that order
+        ids = ids[order]
+        row_slot = row_slot[order]
+        points = np.concatenate(self.points)
+        self.points.clear()
+        x_px = points[order, 0] / np.float32(scale)
+        y_px = points[order, 1] / np.float32(scale)
+        del points, order
+        table = pd.DataFrame({
+            "frame": np.asarray(self.frame_index, dtype=np.int32)[row_slot],
+            "time_s": np.asarray(self.frame_time_s, dtype=np.float64)[row_slot],
+            "track": ids,
+            "x_px": x_px,
+            "y_px": y_px,
         })
+        self.frame_index.clear()
+        self.frame_time_s.clear()
+        return table
 
 
 class KltTracker:
@@ -193,20 +205,37 @@ class KltTracker:
         self._prev = grey
         self._count += 1
 
+    def _flow(self, source: np.ndarray, target: np.ndarray, points: np.ndarray, guess: np.ndarray,
+              levels: int) -> tuple[np.ndarray, np.ndarray]:
+        if len(points) == 0:
+            return np.empty((0, 2), np.float32), np.empty(0, np.uint8)
+        lk = dict(self._lk, maxLevel=levels)
+        moved, status, _ = cv2.calcOpticalFlowPyrLK(source, target, points.reshape(-1, 1, 2),
+                                                    guess.reshape(-1, 1, 2).copy(),
+                                                    flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **lk)
+        return moved.reshape(-1, 2), status.ravel()
+
     def _advance(self, grey: np.ndarray) -> None:
-        start = self._points.reshape(-1, 1, 2)
-        # constant-velocity prediction: the search starts near the answer, so large or fast
-        # motions converge in few iterations
-        guess = (self._points + self._velocity).reshape(-1, 1, 2)
-        moved, status, _ = cv2.calcOpticalFlowPyrLK(self._prev, grey, start, guess, flags=cv2.OPTFLOW_USE_INITIAL_FLOW,
-                                                    **self._lk)
-        back, status_back, _ = cv2.calcOpticalFlowPyrLK(grey, self._prev, moved, None, **self._lk)
-        moved = moved.reshape(-1, 2)
-        round_trip_px = np.linalg.norm(back.reshape(-1, 2) - self._points, axis=1)
+        # Points with a known velocity start from a constant-velocity prediction, close to the
+        # answer, so one pyramid level above the base suffices; new points search the full pyramid.
+        # The backward pass starts from the same prediction reversed, independent of the forward
+        # answer, so a wrong forward match is not confirmed by starting next to it.
+        known = np.any(self._velocity != 0, axis=1)
+        moved = np.empty_like(self._points)
+        status = np.zeros(len(self._points), np.uint8)
+        back = np.empty_like(self._points)
+        status_back = np.zeros(len(self._points), np.uint8)
+        for group, levels in ((known, 1), (~known, self.config.pyramid_levels)):
+            if not group.any():
+                continue
+            points, velocity = self._points[group], self._velocity[group]
+            moved[group], status[group] = self._flow(self._prev, grey, points, points + velocity, levels)
+            back[group], status_back[group] = self._flow(grey, self._prev, moved[group], moved[group] - velocity, levels)
+        round_trip_px = np.linalg.norm(back - self._points, axis=1)
         width, height = self._size
         keep = (
-            (status.ravel() == 1)
-            & (status_back.ravel() == 1)
+            (status == 1)
+            & (status_back == 1)
             & (round_trip_px < self.config.fb_max_error_px)
             & (moved[:, 0] >= 0)
             & (moved[:, 1] >= 0)
@@ -312,7 +341,9 @@ class KltTracker:
         self._anchor_time = np.concatenate([self._anchor_time, np.full(len(corners), time_s)])
 
     def tracks(self) -> pd.DataFrame:
-        """All positions so far: ``frame, time_s, track, x_px, y_px`` in full-resolution pixels."""
+        """All positions: ``frame, time_s, track, x_px, y_px`` in full-resolution pixels.
+
+        Call once, at the end: the store is handed over, not copied."""
         return self._store.frame(self.scale)
 
 
