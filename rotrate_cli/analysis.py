@@ -257,27 +257,27 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     })
     del run, tracks  # the offsets are all that is needed from here on: keep the peak low
     result = rates_from_offsets(offsets, config.method, config.rejection)
-    analysis = Analysis(
-        source=str(source),
-        fps=info.fps,
-        frames=count,
-        duration_s=duration_s,
-        fixation_px=(float(fx), float(fy)),
-        method=config.method,
-        omega_rad_s=result.combined.omega_rad_s,
-        omega_low_rad_s=result.combined.omega_low_rad_s,
-        omega_high_rad_s=result.combined.omega_high_rad_s,
-        direction=result.direction,
-        tracks_total=int(len(result.features)),
-        tracks_used=result.combined.tracks_used,
-        features=result.features,
-        offsets=result.offsets,
-        rejection=config.rejection,
-        warnings=tuple(warnings),
+    return _result(result, source=str(source), fps=info.fps, frames=count, duration_s=duration_s,
+                   fixation_px=(float(fx), float(fy)), method=config.method, rejection=config.rejection,
+                   warnings=tuple(warnings))
+
+
+def _result(rates_result: RateResult, **context: object) -> Analysis:
+    """The Analysis of a rate result and its context; NoResultError when no track was used."""
+    combined = rates_result.combined
+    if combined.tracks_used == 0:
+        raise NoResultError(_no_result_message(rates_result.features))
+    return Analysis(
+        omega_rad_s=combined.omega_rad_s,
+        omega_low_rad_s=combined.omega_low_rad_s,
+        omega_high_rad_s=combined.omega_high_rad_s,
+        direction=rates_result.direction,
+        tracks_total=int(len(rates_result.features)),
+        tracks_used=combined.tracks_used,
+        features=rates_result.features,
+        offsets=rates_result.offsets,
+        **context,  # type: ignore[arg-type]
     )
-    if analysis.tracks_used == 0:
-        raise NoResultError(_no_result_message(result.features))
-    return analysis
 
 
 def _rate_from_times(table: pd.DataFrame) -> float:
@@ -327,24 +327,7 @@ def analyze_tracks(
     offsets = _thin(table, every).assign(offset_px=lambda t: t["position"] - fixation)
     rules = rejection if rejection is not None else RejectionConfig(min_range=0.0, residual_floor=0.0)
     result = rates_from_offsets(offsets[["track", "frame", "time_s", "offset_px"]], method, rules)
-    analysis = Analysis(
-        source=source,
-        fps=float(fps),
-        frames=int(table["frame"].nunique()),
-        duration_s=float(table["time_s"].max() - table["time_s"].min()),
-        fixation_px=(float(fixation), math.nan),
-        method=method,
-        omega_rad_s=result.combined.omega_rad_s,
-        omega_low_rad_s=result.combined.omega_low_rad_s,
-        omega_high_rad_s=result.combined.omega_high_rad_s,
-        direction=result.direction,
-        tracks_total=int(len(result.features)),
-        tracks_used=result.combined.tracks_used,
-        features=result.features,
-        offsets=result.offsets,
-        rejection=rules,
-        position_unit=position_unit,
-    )
-    if analysis.tracks_used == 0:
-        raise NoResultError(_no_result_message(result.features))
-    return analysis
+    return _result(result, source=source, fps=float(fps), frames=int(table["frame"].nunique()),
+                   duration_s=float(table["time_s"].max() - table["time_s"].min()),
+                   fixation_px=(float(fixation), math.nan), method=method, rejection=rules,
+                   position_unit=position_unit)

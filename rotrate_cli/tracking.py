@@ -230,7 +230,8 @@ class KltTracker:
                 continue
             points, velocity = self._points[group], self._velocity[group]
             moved[group], status[group] = self._flow(self._prev, grey, points, points + velocity, levels)
-            back[group], status_back[group] = self._flow(grey, self._prev, moved[group], moved[group] - velocity, levels)
+            back[group], status_back[group] = self._flow(grey, self._prev, moved[group], moved[group] - velocity,
+                                                         levels)
         round_trip_px = np.linalg.norm(back - self._points, axis=1)
         width, height = self._size
         keep = (
