@@ -8,6 +8,7 @@ result, 2 bad input or usage, 130 interrupted. ``--debug`` shows tracebacks.
 from __future__ import annotations
 
 import math
+import os
 import sys
 import traceback
 from collections.abc import Callable, Iterator
@@ -15,6 +16,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, TypeVar
 
+import cv2
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
@@ -225,6 +227,16 @@ def synth_command(
     _run(debug, job)
 
 
+def _quiet_native_logs() -> None:
+    """Keep OpenCV's and FFmpeg's own log lines (e.g. "moov atom not found") off the terminal:
+    the user gets our one-line message instead. ``--debug`` keeps them."""
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET; read when FFmpeg is first used
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+
+
 def main() -> None:
     """Console-script entry point."""
+    if "--debug" not in sys.argv:
+        _quiet_native_logs()
     app()

@@ -162,3 +162,14 @@ def test_synth_writes_clip_and_truth_and_refuses_to_overwrite(tmp_path: Path) ->
     capture = cv2.VideoCapture(str(target))
     assert int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) == 5
     _one_line_error(runner.invoke(app, args), 2, "exists")
+
+
+def test_native_decoder_noise_stays_off_the_terminal(tmp_path: Path) -> None:
+    fake = tmp_path / "fake.mp4"
+    fake.write_text("not a video\n")
+    completed = subprocess.run([sys.executable, "-m", "rotrate_cli", "analyze", str(fake), "--fixation", "1,1"],
+                               capture_output=True, text=True, check=False)
+    assert completed.returncode == 2
+    assert completed.stderr.splitlines() == [
+        f"rotrate: error: could not open {fake} as a video; is it a video file (mp4, mov, avi, mkv)?"
+    ]
