@@ -180,20 +180,24 @@ def sample_rates(
     return flag_samples(rates.fit_samples(offsets, rate), features, rejection)
 
 
+def _sorted_by_track_and_time(offsets: pd.DataFrame) -> bool:
+    track_step = np.diff(offsets["track"].to_numpy())
+    time_step = np.diff(offsets["time_s"].to_numpy())
+    return bool(((track_step > 0) | ((track_step == 0) & (time_step > 0))).all())
+
+
 def rates_from_offsets(offsets: pd.DataFrame, method: str, rejection: RejectionConfig) -> RateResult:
     """Per-track rates and verdicts, and the combined rate.
 
     ``offsets`` has columns ``track, frame, time_s, offset_px``, one row per sample.
     """
-    track_step = np.diff(offsets["track"].to_numpy())
-    time_step = np.diff(offsets["time_s"].to_numpy())
-    if not ((track_step > 0) | ((track_step == 0) & (time_step > 0))).all():
+    if not _sorted_by_track_and_time(offsets):
         offsets = offsets.sort_values(["track", "time_s"], kind="stable").reset_index(drop=True)
     if method == "paper":
         _, features = judge_paper(rates.paper_samples(offsets))
         combined = combine_plain(features.loc[features["inlier"], "omega_rad_s"].to_numpy())
     else:
-        features = judge_fits(offsets, rates.fit_tracks(offsets), rejection)
+        features = judge_fits(offsets, rates.fit_tracks(offsets, rejection.min_samples), rejection)
         used = features[features["inlier"]]
         combined = combine(used["omega_rad_s"].to_numpy(), used["omega_se_rad_s"].to_numpy())
     return RateResult(offsets, features, combined, _direction(offsets, features))
@@ -254,7 +258,7 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         "frame": tracks["frame"].to_numpy(),
         "time_s": tracks["time_s"].to_numpy(),
         "offset_px": tracks["x_px"].to_numpy(dtype=np.float64) - fx,
-    })
+    }, copy=False)
     del run, tracks  # the offsets are all that is needed from here on: keep the peak low
     result = rates_from_offsets(offsets, config.method, config.rejection)
     return _result(result, source=str(source), fps=info.fps, frames=count, duration_s=duration_s,

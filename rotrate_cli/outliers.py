@@ -78,12 +78,14 @@ def judge_fits(samples: pd.DataFrame, fits: dict[int, TrackFit], config: Rejecti
     ``samples`` has columns ``track, offset_px``; ``fits`` holds each track's sinusoid fit.
     """
     sizes = samples.groupby("track", sort=False)["offset_px"].agg(["size", "min", "max"])
-    rows = []
-    for track, (size, low, high) in sizes.iterrows():
-        fit = fits[int(track)]
-        rows.append((int(track), int(size), fit.omega_rad_s, fit.omega_se_rad_s, fit.rms_residual,
-                     fit.amplitude, fit.arc_rad, float(high - low)))
-    table = pd.DataFrame(rows, columns=list(FEATURE_COLUMNS[:-2]))
+    track_fits = [fits[int(track)] for track in sizes.index]
+    table = pd.DataFrame({
+        "track": sizes.index.astype(int),
+        "samples": sizes["size"].to_numpy(dtype=int),
+        **{name: np.array([getattr(fit, name) for fit in track_fits], dtype=float)
+           for name in ("omega_rad_s", "omega_se_rad_s", "rms_residual", "amplitude", "arc_rad")},
+        "range": (sizes["max"] - sizes["min"]).to_numpy(dtype=float),
+    })
     reason = pd.Series("", index=table.index, dtype=object)
     reason[table["samples"] < config.min_samples] = "short"
     reason[(reason == "") & (table["range"] < config.min_range)] = "static"

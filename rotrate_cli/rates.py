@@ -220,8 +220,9 @@ def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterati
         c, s_ = np.cos(w * t) * weight, np.sin(w * t) * weight
         residual = y - params[:, 0:1] * c - params[:, 1:2] * s_
         jacobian = np.stack([c, s_, t * (-params[:, 0:1] * s_ + params[:, 1:2] * c)], axis=2)
-        jtj = np.einsum("kli,klj->kij", jacobian, jacobian)
-        jtr = np.einsum("kli,kl->ki", jacobian, residual)
+        jacobian_t = jacobian.transpose(0, 2, 1)
+        jtj = jacobian_t @ jacobian
+        jtr = (jacobian_t @ residual[:, :, None])[:, :, 0]
         jtj += ridge * np.eye(3) * np.trace(jtj, axis1=1, axis2=2)[:, None, None] + 1e-300 * np.eye(3)
         step = np.linalg.solve(jtj, jtr[:, :, None])[:, :, 0]
         step[~np.isfinite(step).all(axis=1)] = 0.0
@@ -232,7 +233,7 @@ def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterati
     c, s_ = np.cos(w * t) * weight, np.sin(w * t) * weight
     residual = y - params[:, 0:1] * c - params[:, 1:2] * s_
     jacobian = np.stack([c, s_, t * (-params[:, 0:1] * s_ + params[:, 1:2] * c)], axis=2)
-    jtj = np.einsum("kli,klj->kij", jacobian, jacobian)
+    jtj = jacobian.transpose(0, 2, 1) @ jacobian
     rss = (residual**2).sum(1)
     with np.errstate(all="ignore"):
         # a (near-)singular J^T J means omega is not determined by the track: infinite error
@@ -252,14 +253,21 @@ def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterati
     return fits
 
 
-def fit_tracks(samples: pd.DataFrame) -> dict[int, TrackFit]:
+def fit_tracks(samples: pd.DataFrame, min_samples: int = 4) -> dict[int, TrackFit]:
     """Fit every track of ``samples`` (sorted by track then time; columns ``track, time_s,
-    offset_px``); keyed by track. Tracks are fitted in padded batches of similar length."""
+    offset_px``); keyed by track. Tracks are fitted in padded batches of similar length; tracks
+    with fewer than ``min_samples`` samples (at least 4) get a failed fit without trying."""
     tracks = samples["track"].to_numpy()
     times = samples["time_s"].to_numpy(dtype=float)
     offsets = samples["offset_px"].to_numpy(dtype=float)
-    parts = sorted(_track_slices(tracks), key=lambda p: p.stop - p.start)
     fits: dict[int, TrackFit] = {}
+    parts = []
+    for part in _track_slices(tracks):
+        if part.stop - part.start < max(min_samples, 4):
+            fits[int(tracks[part.start])] = _FAILED
+        else:
+            parts.append(part)
+    parts.sort(key=lambda p: p.stop - p.start)
     index = 0
     while index < len(parts):
         longest = parts[index].stop - parts[index].start

@@ -22,6 +22,7 @@ import pandas as pd
 
 from rotrate_cli.decode import Frame
 
+KNOWN_LEVELS = 0
 TRACK_COLUMNS = ("frame", "time_s", "track", "x_px", "y_px")
 
 
@@ -141,7 +142,7 @@ class _Tracks:
             "track": ids,
             "x_px": x_px,
             "y_px": y_px,
-        })
+        }, copy=False)  # pandas copies dict input by default: twice the memory of a long clip
         self.frame_index.clear()
         self.frame_time_s.clear()
         return table
@@ -225,7 +226,7 @@ class KltTracker:
         status = np.zeros(len(self._points), np.uint8)
         back = np.empty_like(self._points)
         status_back = np.zeros(len(self._points), np.uint8)
-        for group, levels in ((known, 1), (~known, self.config.pyramid_levels)):
+        for group, levels in ((known, KNOWN_LEVELS), (~known, self.config.pyramid_levels)):
             if not group.any():
                 continue
             points, velocity = self._points[group], self._velocity[group]
@@ -302,18 +303,29 @@ class KltTracker:
         self._points, self._ids, self._velocity = self._points[keep], self._ids[keep], self._velocity[keep]
         self._anchor, self._anchor_time = self._anchor[keep], self._anchor_time[keep]
 
+    def _near_points(self) -> np.ndarray:
+        """Boolean image: pixels within ``min_distance_px`` of a live point (no seeding there)."""
+        marks = np.zeros(self._seed_mask.shape, np.uint8)
+        if len(self._points):
+            height, width = marks.shape
+            x = np.clip(np.rint(self._points[:, 0]).astype(int), 0, width - 1)
+            y = np.clip(np.rint(self._points[:, 1]).astype(int), 0, height - 1)
+            marks[y, x] = 1
+            radius = max(1, int(self.config.min_distance_px))
+            disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
+            marks = cv2.dilate(marks, disk)
+        return marks.astype(bool)
+
     def _seed(self, grey: np.ndarray, time_s: float, moving: np.ndarray) -> None:
         wanted = self.config.max_points - len(self._points)
-        if wanted <= 0:
-            return
+        if wanted < max(1, self.config.max_points // 10):
+            return  # a corner search costs the same for 3 points as for 30: wait until it pays
         # Seed only where the whole tracking window is on moving pixels: not on the background,
         # not on the outline.
         shape = (self.config.win_width_px | 1, self.config.win_height_px | 1)
         inner = cv2.erode(moving, cv2.getStructuringElement(cv2.MORPH_RECT, shape))
         mask = cv2.bitwise_and(cv2.bitwise_and(inner, self._seed_mask), self._static_mask)
-        radius = max(1, int(self.config.min_distance_px))
-        for x, y in self._points:
-            cv2.circle(mask, (int(round(x)), int(round(y))), radius, 0, -1)
+        mask[self._near_points()] = 0
         # corner detection costs in proportion to the area searched: search the moving box only
         left, top, box_w, box_h = cv2.boundingRect(mask)
         if box_w == 0 or box_h == 0:
