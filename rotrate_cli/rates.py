@@ -227,7 +227,7 @@ def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterati
         step = np.linalg.solve(jtj, jtr[:, :, None])[:, :, 0]
         step[~np.isfinite(step).all(axis=1)] = 0.0
         params += step
-        if np.all(np.abs(step[:, 2]) <= 1e-12 * np.maximum(1.0, np.abs(params[:, 2]))):
+        if np.all(np.abs(step[:, 2]) <= 1e-9 * np.maximum(1.0, np.abs(params[:, 2]))):
             break
     w = params[:, 2:3]
     c, s_ = np.cos(w * t) * weight, np.sin(w * t) * weight
