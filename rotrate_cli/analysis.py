@@ -46,6 +46,9 @@ class AnalysisConfig:
         start_s, end_s: the time span to analyse, in seconds (``end_s`` None: to the end).
         every: use every N-th frame's positions for the rates (tracking still sees every frame).
         method: ``fit`` (ours) or ``paper`` (the reference paper's backward differences).
+        fov_deg: the camera's horizontal field of view, degrees, for the pinhole model; None
+            (and no ``focal_px``) treats the view as orthographic, as the paper does.
+        focal_px: the focal length in pixels, instead of ``fov_deg``.
         tracker: tracking settings.
         rejection: outlier-rejection thresholds.
     """
@@ -56,6 +59,8 @@ class AnalysisConfig:
     end_s: float | None = None
     every: int = 1
     method: str = "fit"
+    fov_deg: float | None = None
+    focal_px: float | None = None
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
     rejection: RejectionConfig = field(default_factory=RejectionConfig)
 
@@ -124,6 +129,15 @@ class RateResult:
     direction: str
 
 
+def _camera(config: AnalysisConfig, width_px: int) -> rates.Camera | None:
+    fx = config.fixation_px[0]
+    if config.focal_px is not None:
+        return rates.Camera(config.focal_px, (fx - (width_px / 2.0 - 0.5)) / config.focal_px)
+    if config.fov_deg is not None:
+        return rates.Camera.from_fov(config.fov_deg, width_px, fx)
+    return None
+
+
 def _check_config(config: AnalysisConfig) -> None:
     if config.method not in rates.METHODS:
         raise InputError(f"unknown method {config.method!r}; use one of {', '.join(rates.METHODS)}")
@@ -133,6 +147,14 @@ def _check_config(config: AnalysisConfig) -> None:
         raise InputError("--start must be 0 seconds or later")
     if config.end_s is not None and not config.end_s > config.start_s:
         raise InputError("--end must be later than --start")
+    if config.fov_deg is not None and config.focal_px is not None:
+        raise InputError("give either --fov or --focal-px, not both")
+    if config.fov_deg is not None and not 0 < config.fov_deg < 170:
+        raise InputError("--fov must be a horizontal field of view between 0 and 170 degrees")
+    if config.focal_px is not None and not (config.focal_px > 0 and math.isfinite(config.focal_px)):
+        raise InputError("--focal-px must be a positive focal length in pixels")
+    if config.method == "paper" and (config.fov_deg is not None or config.focal_px is not None):
+        raise InputError("--method paper is orthographic, as in the paper; drop --fov/--focal-px or use --method fit")
 
 
 def _thin(tracks: pd.DataFrame, every: int) -> pd.DataFrame:
@@ -143,15 +165,22 @@ def _thin(tracks: pd.DataFrame, every: int) -> pd.DataFrame:
 
 
 def _direction(offsets: pd.DataFrame, features: pd.DataFrame) -> str:
-    """Sense of rotation from the net horizontal travel of the inlier tracks.
+    """Sense of rotation, given only on a clear majority of the inlier tracks.
 
-    An opaque object shows its near side, whose points cross in front of the axis: moving right
-    means anticlockwise seen from above. Far-side points (a transparent object, a turntable's top
-    seen from above) travel the other way, so the answer is given only on a clear majority.
+    With a pinhole camera each track's fit says which sense explains it (near points move
+    faster). Otherwise: the net horizontal travel. An opaque object shows its near side, whose
+    points cross in front of the axis: moving right means anticlockwise seen from above.
+    Far-side points (a transparent object, a turntable's top seen from above) travel the other
+    way, hence the majority rule.
     """
-    used = set(features.loc[features["inlier"], "track"].astype(int))
+    inliers = features[features["inlier"]]
+    used = set(inliers["track"].astype(int))
     if len(used) < 5:
         return "unknown"
+    senses = inliers["sense"].dropna().to_numpy()
+    if len(senses) >= 5:
+        vote = float(senses.mean())
+        return "ccw" if vote >= 0.6 else "cw" if vote <= -0.6 else "unknown"
     # offsets are sorted by track then time: a track's first and last rows bound its slice
     tracks = offsets["track"].to_numpy()
     values = offsets["offset_px"].to_numpy()
@@ -186,10 +215,13 @@ def _sorted_by_track_and_time(offsets: pd.DataFrame) -> bool:
     return bool(((track_step > 0) | ((track_step == 0) & (time_step > 0))).all())
 
 
-def rates_from_offsets(offsets: pd.DataFrame, method: str, rejection: RejectionConfig) -> RateResult:
+def rates_from_offsets(
+    offsets: pd.DataFrame, method: str, rejection: RejectionConfig, camera: rates.Camera | None = None
+) -> RateResult:
     """Per-track rates and verdicts, and the combined rate.
 
-    ``offsets`` has columns ``track, frame, time_s, offset_px``, one row per sample.
+    ``offsets`` has columns ``track, frame, time_s, offset_px``, one row per sample; ``camera``
+    (fit method only) switches from orthographic to pinhole projection.
     """
     if not _sorted_by_track_and_time(offsets):
         offsets = offsets.sort_values(["track", "time_s"], kind="stable").reset_index(drop=True)
@@ -197,7 +229,7 @@ def rates_from_offsets(offsets: pd.DataFrame, method: str, rejection: RejectionC
         _, features = judge_paper(rates.paper_samples(offsets))
         combined = combine_plain(features.loc[features["inlier"], "omega_rad_s"].to_numpy())
     else:
-        features = judge_fits(offsets, rates.fit_tracks(offsets, rejection.min_samples), rejection)
+        features = judge_fits(offsets, rates.fit_tracks(offsets, rejection.min_samples, camera), rejection)
         used = features[features["inlier"]]
         combined = combine(used["omega_rad_s"].to_numpy(), used["omega_se_rad_s"].to_numpy())
     return RateResult(offsets, features, combined, _direction(offsets, features))
@@ -260,10 +292,12 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         "offset_px": tracks["x_px"].to_numpy(dtype=np.float64) - fx,
     }, copy=False)
     del run, tracks  # the offsets are all that is needed from here on: keep the peak low
-    result = rates_from_offsets(offsets, config.method, config.rejection)
+    camera = _camera(config, info.width_px)
+    result = rates_from_offsets(offsets, config.method, config.rejection, camera)
     return _result(result, source=str(source), fps=info.fps, frames=count, duration_s=duration_s,
-                   fixation_px=(float(fx), float(fy)), method=config.method, rejection=config.rejection,
-                   warnings=tuple(warnings))
+                   fixation_px=(float(fx), float(fy)),
+                   method=config.method if camera is None else f"{config.method}+pinhole(f={camera.focal_px:.1f}px)",
+                   rejection=config.rejection, warnings=tuple(warnings))
 
 
 def _result(rates_result: RateResult, **context: object) -> Analysis:

@@ -131,6 +131,10 @@ def analyze_command(
     roi: Annotated[str | None, typer.Option("--roi", help="X,Y,W,H: seed points only in this box.")] = None,
     every: EveryOption = 1,
     method: MethodOption = "fit",
+    fov: Annotated[float | None, typer.Option("--fov", help="Horizontal field of view, degrees: corrects "
+                                                            "for perspective (pinhole camera).")] = None,
+    focal_px: Annotated[float | None, typer.Option("--focal-px", help="Focal length in pixels, instead of "
+                                                                      "--fov.")] = None,
     fmt: FormatOption = "table",
     output: OutputOption = None,
     force: ForceOption = False,
@@ -150,7 +154,7 @@ def analyze_command(
         if output is not None:
             check_output_path(output, force)  # fail before a long run, not after
         config = AnalysisConfig(fixation_px=(fx, fy), fps=fps, start_s=start, end_s=end, every=every,
-                                method=method, tracker=tracker)
+                                method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker)
         with _progress_bar(quiet) as progress:
             analysis = analyze(video, config, progress)
         _emit(analysis, fmt, output, force)

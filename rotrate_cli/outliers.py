@@ -20,7 +20,7 @@ from scipy.special import stdtrit
 from rotrate_cli.rates import TrackFit
 
 FEATURE_COLUMNS = (
-    "track", "samples", "omega_rad_s", "omega_se_rad_s", "rms_residual", "amplitude", "arc_rad",
+    "track", "samples", "omega_rad_s", "omega_se_rad_s", "rms_residual", "amplitude", "arc_rad", "sense",
     "range", "inlier", "reason",
 )
 
@@ -83,7 +83,7 @@ def judge_fits(samples: pd.DataFrame, fits: dict[int, TrackFit], config: Rejecti
         "track": sizes.index.astype(int),
         "samples": sizes["size"].to_numpy(dtype=int),
         **{name: np.array([getattr(fit, name) for fit in track_fits], dtype=float)
-           for name in ("omega_rad_s", "omega_se_rad_s", "rms_residual", "amplitude", "arc_rad")},
+           for name in ("omega_rad_s", "omega_se_rad_s", "rms_residual", "amplitude", "arc_rad", "sense")},
         "range": (sizes["max"] - sizes["min"]).to_numpy(dtype=float),
     })
     reason = pd.Series("", index=table.index, dtype=object)
@@ -198,7 +198,7 @@ def judge_paper(rates: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
         omega = float(good.mean()) if k else math.nan
         se = float(good.std(ddof=1) / math.sqrt(k)) if k > 1 else math.nan
         offsets = group["offset_px"]
-        rows.append((int(track), len(group), omega, se, math.nan, float(offsets.abs().max()), math.nan,
+        rows.append((int(track), len(group), omega, se, math.nan, float(offsets.abs().max()), math.nan, math.nan,
                      float(offsets.max() - offsets.min()), k > 0, "" if k else "no_valid_sample"))
     features = pd.DataFrame(rows, columns=list(FEATURE_COLUMNS))
     return table, features

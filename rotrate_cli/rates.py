@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -40,6 +41,8 @@ class TrackFit:
         rms_residual: root-mean-square misfit of the offsets, in their units.
         amplitude: the fitted amplitude ``sqrt(a^2 + b^2)``, in the offsets' units.
         arc_rad: the rotation angle the track spans, ``omega * duration``.
+        sense: +1 anticlockwise seen from above, -1 clockwise, as the pinhole fit found it; NaN
+            for orthographic fits, which cannot tell.
     """
 
     omega_rad_s: float
@@ -47,6 +50,27 @@ class TrackFit:
     rms_residual: float
     amplitude: float
     arc_rad: float
+    sense: float = math.nan
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera, for perspective fits.
+
+    Attributes:
+        focal_px: focal length in pixels (from the field of view: ``(width / 2) / tan(fov / 2)``).
+        axis_n: the axis's horizontal image position relative to the principal point (the image
+            centre), divided by the focal length.
+    """
+
+    focal_px: float
+    axis_n: float
+
+    @staticmethod
+    def from_fov(fov_deg: float, width_px: int, fixation_x_px: float) -> Camera:
+        """The camera of a horizontal field of view, principal point at the image centre."""
+        focal_px = (width_px / 2.0) / math.tan(math.radians(fov_deg) / 2.0)
+        return Camera(focal_px, (fixation_x_px - (width_px / 2.0 - 0.5)) / focal_px)
 
 
 _FAILED = TrackFit(math.nan, math.nan, math.nan, math.nan, math.nan)
@@ -170,11 +194,77 @@ def fit_samples(samples: pd.DataFrame, omega_rad_s: dict[int, float]) -> pd.Data
 _BATCH_ELEMENTS = 20_000
 
 
-def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterations: int = 20) -> list[TrackFit]:
-    """Gauss-Newton fits of ``a cos(wt) + b sin(wt)`` to many padded tracks at once.
+Model = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
-    Rows are tracks; ``mask`` marks real samples (padding is zero-weighted). Same model,
-    start and standard error as :func:`fit_track`, vectorised over tracks.
+
+def _orthographic(t: np.ndarray, weight: np.ndarray) -> Model:
+    """``y = A cos(wt) + B sin(wt)``; params rows ``(A, B, w)``. Returns model and Jacobian."""
+
+    def model(params: np.ndarray, _: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        a, b, w = params[:, 0:1], params[:, 1:2], params[:, 2:3]
+        c, s_ = np.cos(w * t) * weight, np.sin(w * t) * weight
+        return a * c + b * s_, np.stack([c, s_, t * (-a * s_ + b * c)], axis=2)
+
+    return model
+
+
+def _pinhole(t: np.ndarray, weight: np.ndarray, axis_n: float) -> Model:
+    """A pinhole camera aimed at the axis's depth, positions normalised by the focal length.
+
+    With the camera at unit distance from the axis, a point at normalised radius r and angle th
+    projects to ``(axis_n + r sin th) / (1 - r cos th)``. Written with ``L = A cos(wt) + B sin(wt)``
+    (the orthographic offset) and its depth ``Z = -A sin(wt) + B cos(wt)``: ``x = (axis_n + L) / (1 - Z)``.
+    The sign of ``w`` is observable here (near points move faster), unlike orthographically.
+    """
+
+    def model(params: np.ndarray, _: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        a, b, w = params[:, 0:1], params[:, 1:2], params[:, 2:3]
+        c, s_ = np.cos(w * t), np.sin(w * t)
+        lateral = a * c + b * s_
+        depth = -a * s_ + b * c
+        numerator = axis_n + lateral
+        denominator = 1.0 - depth
+        denominator = np.where(np.abs(denominator) > 1e-6, denominator, 1e-6)
+        square = denominator**2
+        jacobian = np.stack([
+            (c * denominator - numerator * s_) / square,
+            (s_ * denominator + numerator * c) / square,
+            t * (depth * denominator - numerator * lateral) / square,
+        ], axis=2) * weight[:, :, None]
+        return numerator / denominator * weight, jacobian
+
+    return model
+
+
+def _gauss_newton(params: np.ndarray, model: Model, y: np.ndarray, iterations: int) -> np.ndarray:
+    """Batched Gauss-Newton on rows of ``params``; returns the refined parameters."""
+    params = params.copy()
+    eye = np.eye(params.shape[1])
+    for _ in range(iterations):
+        predicted, jacobian = model(params, y)
+        residual = y - predicted
+        jacobian_t = jacobian.transpose(0, 2, 1)
+        jtj = jacobian_t @ jacobian
+        jtr = (jacobian_t @ residual[:, :, None])[:, :, 0]
+        jtj += 1e-12 * eye * np.trace(jtj, axis1=1, axis2=2)[:, None, None] + 1e-300 * eye
+        step = np.linalg.solve(jtj, jtr[:, :, None])[:, :, 0]
+        step[~np.isfinite(step).all(axis=1)] = 0.0
+        params += step
+        if np.all(np.abs(step[:, 2]) <= 1e-9 * np.maximum(1.0, np.abs(params[:, 2]))):
+            break
+    return params
+
+
+def _fit_batch(
+    time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, camera: Camera | None = None, sense: int = 0,
+    iterations: int = 20,
+) -> list[TrackFit]:
+    """Least-squares fits of many padded tracks at once (rows are tracks, ``mask`` marks real samples).
+
+    Orthographic: ``offset = A cos(wt) + B sin(wt)``, started from the exact recurrence and a few
+    trial rates around it, refined by Gauss-Newton. With a pinhole ``camera`` that fit starts
+    the perspective model in the given ``sense`` (+1 anticlockwise, -1 clockwise), or with
+    ``sense=0`` in both, keeping the better one per track.
     """
     weight = mask.astype(float)
     n = weight.sum(axis=1)
@@ -211,28 +301,29 @@ def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterati
         better = rss < best_rss
         best = np.where(better, omega * factor, best)
         best_rss = np.where(better, rss, best_rss)
-    omega = best
-    a, b, _ = amplitudes(omega)
-    params = np.column_stack([a, b, omega])
-    ridge = 1e-12
-    for _ in range(iterations):
-        w = params[:, 2:3]
-        c, s_ = np.cos(w * t) * weight, np.sin(w * t) * weight
-        residual = y - params[:, 0:1] * c - params[:, 1:2] * s_
-        jacobian = np.stack([c, s_, t * (-params[:, 0:1] * s_ + params[:, 1:2] * c)], axis=2)
-        jacobian_t = jacobian.transpose(0, 2, 1)
-        jtj = jacobian_t @ jacobian
-        jtr = (jacobian_t @ residual[:, :, None])[:, :, 0]
-        jtj += ridge * np.eye(3) * np.trace(jtj, axis1=1, axis2=2)[:, None, None] + 1e-300 * np.eye(3)
-        step = np.linalg.solve(jtj, jtr[:, :, None])[:, :, 0]
-        step[~np.isfinite(step).all(axis=1)] = 0.0
-        params += step
-        if np.all(np.abs(step[:, 2]) <= 1e-9 * np.maximum(1.0, np.abs(params[:, 2]))):
-            break
-    w = params[:, 2:3]
-    c, s_ = np.cos(w * t) * weight, np.sin(w * t) * weight
-    residual = y - params[:, 0:1] * c - params[:, 1:2] * s_
-    jacobian = np.stack([c, s_, t * (-params[:, 0:1] * s_ + params[:, 1:2] * c)], axis=2)
+    a, b, _ = amplitudes(best)
+    params = _gauss_newton(np.column_stack([a, b, best]), _orthographic(t, weight), y, iterations)
+    scale = 1.0
+    model = _orthographic(t, weight)
+    target = y
+    if camera is not None:
+        # normalised image coordinates relative to the principal point; the orthographic fit
+        # (A, B, w) is the same motion as (A, -B, -w): start the pinhole model from both senses
+        scale = camera.focal_px
+        target = (offset / scale + camera.axis_n) * weight
+        model = _pinhole(t, weight, camera.axis_n)
+        if sense == 0:
+            starts = [params / [scale, scale, 1.0], params * [1.0 / scale, -1.0 / scale, -1.0]]
+            fitted = [_gauss_newton(start, model, target, iterations) for start in starts]
+            costs = [((target - model(fit, target)[0]) ** 2).sum(1) for fit in fitted]
+            params = np.where((costs[0] <= costs[1])[:, None], fitted[0], fitted[1])
+        else:  # a sense decided for the whole body (see fit_tracks)
+            flip = 1.0 if sense > 0 else -1.0
+            start = params * [1.0 / scale, 1.0 / scale, 1.0]
+            start[:, 1:] *= np.where(start[:, 2:3] * flip < 0, -1.0, 1.0)
+            params = _gauss_newton(start, model, target, iterations)
+    predicted, jacobian = model(params, target)
+    residual = target - predicted
     jtj = jacobian.transpose(0, 2, 1) @ jacobian
     rss = (residual**2).sum(1)
     with np.errstate(all="ignore"):
@@ -243,20 +334,46 @@ def _fit_batch(time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, iterati
         se = np.sqrt(np.maximum(inverse_22 * rss / np.maximum(n - 3, 1), 0.0))
     duration = np.where(mask, time_s, -np.inf).max(1) - np.where(mask, time_s, np.inf).min(1)
     fits = []
-    for k in range(len(omega)):
+    for k in range(len(params)):
         w_k = abs(float(params[k, 2]))
         if not valid[k] or not math.isfinite(w_k) or w_k == 0:
             fits.append(_FAILED)
             continue
-        amplitude = float(math.hypot(params[k, 0], params[k, 1]))
-        fits.append(TrackFit(w_k, float(se[k]), math.sqrt(float(rss[k]) / n[k]), amplitude, w_k * float(duration[k])))
+        amplitude = float(math.hypot(params[k, 0], params[k, 1])) * scale
+        sense = float(np.sign(params[k, 2])) if camera is not None else math.nan
+        fits.append(TrackFit(w_k, float(se[k]), math.sqrt(float(rss[k]) / n[k]) * scale, amplitude,
+                             w_k * float(duration[k]), sense))
     return fits
 
 
-def fit_tracks(samples: pd.DataFrame, min_samples: int = 4) -> dict[int, TrackFit]:
+#: How much better (in summed squared residual, relative to its noise level) one sense of
+#: rotation must explain all tracks than the other before the sense is reported.
+SENSE_EVIDENCE = 25.0
+
+
+def fit_tracks(samples: pd.DataFrame, min_samples: int = 4, camera: Camera | None = None) -> dict[int, TrackFit]:
     """Fit every track of ``samples`` (sorted by track then time; columns ``track, time_s,
-    offset_px``); keyed by track. Tracks are fitted in padded batches of similar length; tracks
-    with fewer than ``min_samples`` samples (at least 4) get a failed fit without trying."""
+    offset_px``); keyed by track. Tracks with fewer than ``min_samples`` samples (at least 4)
+    get a failed fit without trying.
+
+    With a pinhole ``camera`` all tracks are fitted in both senses of rotation and the sense
+    that explains the body as a whole is kept (a rigid body has one); each fit's ``sense`` says
+    it, or is NaN when the two senses explain the tracks about equally well.
+    """
+    if camera is None:
+        return _fit_all(samples, min_samples, None, 0)
+    fits = {sense: _fit_all(samples, min_samples, camera, sense) for sense in (1, -1)}
+    both = [k for k in fits[1] if math.isfinite(fits[1][k].rms_residual) and math.isfinite(fits[-1][k].rms_residual)]
+    count = samples.groupby("track", sort=False).size()
+    rss = {sense: sum(fits[sense][k].rms_residual ** 2 * count[k] for k in both) for sense in (1, -1)}
+    chosen = 1 if rss[1] <= rss[-1] else -1
+    noise = rss[chosen] / max(sum(count[k] for k in both) - 3 * len(both), 1)
+    decided = noise > 0 and (rss[-chosen] - rss[chosen]) / noise >= SENSE_EVIDENCE
+    return {k: replace(fit, sense=float(chosen) if decided and math.isfinite(fit.omega_rad_s) else math.nan)
+            for k, fit in fits[chosen].items()}
+
+
+def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None, sense: int) -> dict[int, TrackFit]:
     tracks = samples["track"].to_numpy()
     times = samples["time_s"].to_numpy(dtype=float)
     offsets = samples["offset_px"].to_numpy(dtype=float)
@@ -288,6 +405,6 @@ def fit_tracks(samples: pd.DataFrame, min_samples: int = 4) -> dict[int, TrackFi
             time_s[row, :size] = times[part]
             offset[row, :size] = offsets[part]
             mask[row, :size] = True
-        for part, fit in zip(batch, _fit_batch(time_s, offset, mask), strict=True):
+        for part, fit in zip(batch, _fit_batch(time_s, offset, mask, camera, sense), strict=True):
             fits[int(tracks[part.start])] = fit
     return fits

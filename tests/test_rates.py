@@ -74,3 +74,35 @@ def test_local_samples_give_the_rate_at_every_interior_sample() -> None:
     assert np.allclose(valid, 0.9, rtol=1e-6)
     interior = table.dropna(subset=["d2y_dt2"])
     assert np.allclose(interior["d2y_dt2"], -(0.9**2) * interior["offset_px"], rtol=1e-5, atol=1e-9)
+
+
+@pytest.mark.parametrize("omega", [0.5, -0.5])
+def test_pinhole_fit_recovers_rate_and_sense(omega: float) -> None:
+    # camera 1 unit from the axis (normalised), point at radius 0.25, axis 40 px right of centre
+    focal_px, axis_px = 1200.0, 40.0
+    camera = rates.Camera(focal_px, axis_px / focal_px)
+    time_s = np.arange(60) / 30.0
+    angle = omega * time_s + 0.3
+    x_n = (camera.axis_n + 0.25 * np.sin(angle)) / (1 - 0.25 * np.cos(angle))
+    offset = x_n * focal_px - axis_px
+    fit = rates._fit_batch(time_s[None], offset[None], np.ones((1, 60), bool), camera)[0]
+    assert fit.omega_rad_s == pytest.approx(abs(omega), rel=1e-7)
+    assert fit.sense == np.sign(omega)
+    ortho = rates.fit_track(time_s, offset)
+    assert abs(ortho.omega_rad_s / abs(omega) - 1) > 0.01  # what ignoring perspective costs here
+
+
+def test_body_wide_sense_from_many_weak_tracks(rng: np.random.Generator) -> None:
+    focal_px = 1500.0
+    camera = rates.Camera(focal_px, 0.0)
+    rows = []
+    for track in range(12):
+        time_s = np.arange(45) / 30.0 + rng.uniform(0, 2)
+        angle = -0.7 * time_s + rng.uniform(-1, 1)  # clockwise
+        radius = rng.uniform(0.04, 0.09)
+        x_n = radius * np.sin(angle) / (1 - radius * np.cos(angle))
+        rows.append(pd.DataFrame({"track": track, "time_s": time_s,
+                                  "offset_px": x_n * focal_px + rng.normal(0, 0.05, 45)}))
+    fits = rates.fit_tracks(pd.concat(rows, ignore_index=True), camera=camera)
+    assert all(fit.sense == -1 for fit in fits.values())
+    assert np.median([fit.omega_rad_s for fit in fits.values()]) == pytest.approx(0.7, rel=0.01)

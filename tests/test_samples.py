@@ -47,3 +47,15 @@ def test_cli_json_on_a_sample_has_the_documented_fields() -> None:
     used = [f for f in report["features"] if f["inlier"]]
     assert len(used) == report["tracks_used"]
     assert all(f["reason"] for f in report["features"] if not f["inlier"])
+
+
+def test_perspective_sample_with_the_pinhole_model() -> None:
+    clip = SAMPLES / "box_perspective.mp4"
+    truth = truth_of(clip)
+    fixation = tuple(truth["fixation_px"])
+    plain = analyze(clip, AnalysisConfig(fixation_px=fixation))
+    corrected = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=truth["scene"]["fov_deg"]))
+    assert abs(plain.omega_rad_s / truth["omega_rad_s"] - 1) > 0.03  # what perspective costs the paper's model
+    assert corrected.omega_rad_s == pytest.approx(truth["omega_rad_s"], rel=0.01)
+    assert corrected.omega_low_rad_s <= truth["omega_rad_s"] <= corrected.omega_high_rad_s
+    assert corrected.direction == truth["direction"]
