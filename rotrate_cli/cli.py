@@ -167,7 +167,7 @@ def analyze_command(
 
 @app.command("omega")
 def omega_command(
-    tracks: Annotated[Path, typer.Argument(help="CSV of tracks: track (or feature), frame, [time_s], position.")],
+    tracks: Annotated[Path, typer.Argument(help="Tracks CSV: track (or feature), frame, optional time_s, position.")],
     fixation: Annotated[float, typer.Option("--fixation", help="Axis position, in the position column's units.")],
     position_column: Annotated[str, typer.Option("--position-column", help="The horizontal position column.")] = "x",
     fps: Annotated[float | None, typer.Option("--fps", help="Frame rate: times are frame / fps (else time_s).")] = None,

@@ -373,6 +373,30 @@ def fit_tracks(samples: pd.DataFrame, min_samples: int = 4, camera: Camera | Non
             for k, fit in fits[chosen].items()}
 
 
+def _pad(times: np.ndarray, offsets: np.ndarray, parts: list[slice]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    longest = max((part.stop - part.start for part in parts), default=0)
+    time_s = np.zeros((len(parts), longest))
+    offset = np.zeros((len(parts), longest))
+    mask = np.zeros((len(parts), longest), dtype=bool)
+    for row, part in enumerate(parts):
+        size = part.stop - part.start
+        time_s[row, :size] = times[part]
+        offset[row, :size] = offsets[part]
+        mask[row, :size] = True
+    return time_s, offset, mask
+
+
+def padded_tracks(samples: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The tracks of ``samples`` (sorted by track then time; columns ``track, time_s,
+    offset_px``) as padded rows: ``time_s, offset_px, mask`` (tracks x longest track) and the
+    track ids."""
+    tracks = samples["track"].to_numpy()
+    parts = _track_slices(tracks)
+    times, offsets = samples["time_s"].to_numpy(dtype=float), samples["offset_px"].to_numpy(dtype=float)
+    time_s, offset, mask = _pad(times, offsets, parts)
+    return time_s, offset, mask, np.array([tracks[part.start] for part in parts], dtype=int)
+
+
 def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None, sense: int) -> dict[int, TrackFit]:
     tracks = samples["track"].to_numpy()
     times = samples["time_s"].to_numpy(dtype=float)
@@ -387,7 +411,6 @@ def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None, sen
     parts.sort(key=lambda p: p.stop - p.start)
     index = 0
     while index < len(parts):
-        longest = parts[index].stop - parts[index].start
         batch = [parts[index]]
         index += 1
         while index < len(parts):
@@ -395,16 +418,8 @@ def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None, sen
             if (len(batch) + 1) * longest_next > _BATCH_ELEMENTS:
                 break
             batch.append(parts[index])
-            longest = longest_next
             index += 1
-        time_s = np.zeros((len(batch), longest))
-        offset = np.zeros((len(batch), longest))
-        mask = np.zeros((len(batch), longest), dtype=bool)
-        for row, part in enumerate(batch):
-            size = part.stop - part.start
-            time_s[row, :size] = times[part]
-            offset[row, :size] = offsets[part]
-            mask[row, :size] = True
+        time_s, offset, mask = _pad(times, offsets, batch)
         for part, fit in zip(batch, _fit_batch(time_s, offset, mask, camera, sense), strict=True):
             fits[int(tracks[part.start])] = fit
     return fits
