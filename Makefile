@@ -32,5 +32,9 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_speed.py
 
+## bench-accuracy: the paper's method vs ours on 14 rendered conditions with known rates (renders cached)
+bench-accuracy: $(STAMP)
+	$(BIN)/python benchmarks/bench_accuracy.py
+
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache bench_out

@@ -311,7 +311,8 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         raise InputError(f"--roi must be X,Y,W,H inside the {info.width_px}x{info.height_px} frame")
 
     scale = tracking_scale(info.width_px, config.tracker)
-    frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale))
+    blur = config.tracker.blur_sigma_px
+    frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale, blur))
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
     run = track_frames(prefetch(frames), (info.width_px, info.height_px), config.tracker, notify)

@@ -207,6 +207,9 @@ def synth_command(
     fov: Annotated[float, typer.Option("--fov", help="Horizontal field of view, degrees (perspective).")] = 25.0,
     axis_offset: Annotated[float, typer.Option("--axis-offset", help="Axis offset from the centre, px.")] = 0.0,
     noise: Annotated[float, typer.Option("--noise", help="Sensor noise, grey levels.")] = 0.0,
+    jpeg_quality: Annotated[
+        int | None, typer.Option("--jpeg-quality", help="Pass each frame through JPEG at this quality (1-100).")
+    ] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of textures and noise.")] = 0,
     force: ForceOption = False,
     debug: DebugOption = False,
@@ -220,7 +223,7 @@ def synth_command(
             raise InputError(f"--size takes WIDTHxHEIGHT such as 640x360; got {size!r}") from None
         scene = SceneConfig(shape=shape, omega_rad_s=omega, fps=fps, duration_s=duration, width_px=width,
                             height_px=height, projection=projection, fov_deg=fov, axis_offset_px=axis_offset,
-                            noise_sigma=noise, seed=seed)
+                            noise_sigma=noise, jpeg_quality=jpeg_quality, seed=seed)
         truth = write_clip(scene, output, force=force)
         fx, fy = truth["fixation_px"]  # type: ignore[misc]
         Console(highlight=False).print(

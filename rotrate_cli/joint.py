@@ -14,7 +14,12 @@ part does not depend on omega.
 
 The 95% interval comes from the delete-one-track jackknife of the same minimisation, which
 sees the spread between tracks (tracking errors, residual model error) rather than trusting
-the per-sample noise model alone.
+the per-sample noise model alone. Errors that tracks of one kind share (points that slide near
+the outline, long-lived points that drift) cancel in that jackknife; so the tracks are also
+split into :data:`GROUPS` groups by the angle they span and, separately, by their distance from
+the axis, and the delete-one-group jackknife of each split widens the interval where the
+groups disagree. Measured on the accuracy suite (``make bench-accuracy``), that is what brings
+the coverage of the truth from about half the clips to the nominal rate.
 """
 
 from __future__ import annotations
@@ -32,6 +37,9 @@ from rotrate_cli.rates import Camera, padded_tracks
 #: Grid points per refinement pass, and the number of passes.
 _GRID_POINTS = 41
 _PASSES = 3
+#: Groups per split for the grouped jackknife, and the fewest tracks per group it needs.
+GROUPS = 5
+_MIN_PER_GROUP = 3
 
 
 def _misfits(
@@ -140,10 +148,34 @@ def joint_fit(
     finite = leave_one_out[np.isfinite(leave_one_out)]
     if len(finite) < 2:
         return Combined(omega, math.nan, math.nan, k)
-    m = len(finite)
-    se = math.sqrt((m - 1) / m * float(((finite - finite.mean()) ** 2).sum()))
-    half = float(stdtrit(m - 1, 0.975)) * se
+    half = _jackknife_half_width(finite)
+    if k >= GROUPS * _MIN_PER_GROUP:
+        arc = np.abs(omega) * ((time_s.max(1) - time_s.min(1)))
+        distance = np.abs(offset).sum(1) / n
+        groups = [np.array_split(np.argsort(key, kind="stable"), GROUPS) for key in (arc, distance)]
+        for relative in (0.05, 0.3):
+            grid = np.linspace(omega * (1 - relative), omega * (1 + relative), 201)
+            weighted = misfits(grid) * weights[:, None]
+            estimates = [_delete_one_group(grid, weighted, split) for split in groups]
+            if all(np.isfinite(e).all() for e in estimates):
+                half = max(half, *(_jackknife_half_width(e) for e in estimates))
+                break
+        else:  # a group on its own pulls the rate more than 30% away: no trustworthy interval
+            half = max(half, omega)
     return Combined(omega, max(omega - half, 0.0), omega + half, k)
+
+
+def _jackknife_half_width(estimates: np.ndarray) -> float:
+    """Half-width of the 95% t-interval from delete-one estimates."""
+    m = len(estimates)
+    se = math.sqrt((m - 1) / m * float(((estimates - estimates.mean()) ** 2).sum()))
+    return float(stdtrit(m - 1, 0.975)) * se
+
+
+def _delete_one_group(grid: np.ndarray, weighted: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
+    """The joint minimum with each group of tracks left out in turn (NaN where off ``grid``)."""
+    total = weighted.sum(0)
+    return _parabola_minimum(grid, np.array([total - weighted[g].sum(0) for g in groups]))
 
 
 def _search(

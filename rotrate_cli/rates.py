@@ -346,9 +346,28 @@ def _fit_batch(
     return fits
 
 
-#: How much better (in summed squared residual, relative to its noise level) one sense of
-#: rotation must explain all tracks than the other before the sense is reported.
+#: How much better (in summed evidence, see :func:`_sense_evidence`) one sense of rotation
+#: must explain all tracks than the other before the sense is reported.
 SENSE_EVIDENCE = 25.0
+#: The most one track may add to that evidence: a rigid body's sense is a vote of its tracks,
+#: and a track the pinhole model cannot follow (a slipping point, a fit that ran away) must not
+#: outvote hundreds of good ones.
+TRACK_EVIDENCE_CAP = 9.0
+
+
+def _sense_evidence(plus: dict[int, TrackFit], minus: dict[int, TrackFit], count: pd.Series) -> float:
+    """Positive when the anticlockwise fits explain the tracks better: per track, the drop in
+    squared misfit in units of that track's noise variance, capped at +-TRACK_EVIDENCE_CAP, summed."""
+    total = 0.0
+    for k, fit in plus.items():
+        other = minus[k]
+        if not (math.isfinite(fit.rms_residual) and math.isfinite(other.rms_residual)):
+            continue
+        n = int(count[k])
+        rss_plus, rss_minus = fit.rms_residual**2 * n, other.rms_residual**2 * n
+        variance = max(min(rss_plus, rss_minus) / max(n - 3, 1), 1e-6)
+        total += float(np.clip((rss_minus - rss_plus) / variance, -TRACK_EVIDENCE_CAP, TRACK_EVIDENCE_CAP))
+    return total
 
 
 def fit_tracks(samples: pd.DataFrame, min_samples: int = 4, camera: Camera | None = None) -> dict[int, TrackFit]:
@@ -363,12 +382,9 @@ def fit_tracks(samples: pd.DataFrame, min_samples: int = 4, camera: Camera | Non
     if camera is None:
         return _fit_all(samples, min_samples, None, 0)
     fits = {sense: _fit_all(samples, min_samples, camera, sense) for sense in (1, -1)}
-    both = [k for k in fits[1] if math.isfinite(fits[1][k].rms_residual) and math.isfinite(fits[-1][k].rms_residual)]
-    count = samples.groupby("track", sort=False).size()
-    rss = {sense: sum(fits[sense][k].rms_residual ** 2 * count[k] for k in both) for sense in (1, -1)}
-    chosen = 1 if rss[1] <= rss[-1] else -1
-    noise = rss[chosen] / max(sum(count[k] for k in both) - 3 * len(both), 1)
-    decided = noise > 0 and (rss[-chosen] - rss[chosen]) / noise >= SENSE_EVIDENCE
+    evidence = _sense_evidence(fits[1], fits[-1], samples.groupby("track", sort=False).size())
+    chosen = 1 if evidence >= 0 else -1
+    decided = abs(evidence) >= SENSE_EVIDENCE
     return {k: replace(fit, sense=float(chosen) if decided and math.isfinite(fit.omega_rad_s) else math.nan)
             for k, fit in fits[chosen].items()}
 

@@ -46,6 +46,8 @@ class SceneConfig:
         axis_offset_px: horizontal offset of the axis from the frame centre, pixels.
         start_angle_rad: the object's turn at t = 0.
         noise_sigma: standard deviation of added sensor noise, grey levels.
+        jpeg_quality: when set (1-100), each frame goes through JPEG at that quality before it
+            is written, on top of the video codec: heavy compression, blocks and ringing.
         seed: seeds the textures and the noise: same seed, same clip.
         supersample: rays per pixel along each side (antialiasing).
     """
@@ -62,6 +64,7 @@ class SceneConfig:
     axis_offset_px: float = 0.0
     start_angle_rad: float = 0.3
     noise_sigma: float = 0.0
+    jpeg_quality: int | None = None
     seed: int = 0
     supersample: int = 2
 
@@ -80,6 +83,8 @@ def _check(scene: SceneConfig) -> None:
         raise InputError("the clip needs a positive --fps and a --duration of at least 3 frames")
     if scene.width_px < 16 or scene.height_px < 16:
         raise InputError("the frame must be at least 16x16 pixels")
+    if scene.jpeg_quality is not None and not 1 <= scene.jpeg_quality <= 100:
+        raise InputError("--jpeg-quality must be between 1 and 100")
     if not 0 < scene.fov_deg < 170:
         raise InputError("--fov must be between 0 and 170 degrees")
 
@@ -223,7 +228,11 @@ class Renderer:
         if scene.noise_sigma > 0:
             noise_rng = np.random.default_rng((self._noise_seed, index))
             small = small + noise_rng.normal(0.0, scene.noise_sigma, small.shape)
-        return np.clip(np.rint(small), 0, 255).astype(np.uint8)[:, :, ::-1].copy()
+        frame = np.clip(np.rint(small), 0, 255).astype(np.uint8)[:, :, ::-1].copy()
+        if scene.jpeg_quality is not None:
+            _, encoded = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, int(scene.jpeg_quality)])
+            frame = cv2.imdecode(encoded, cv2.IMREAD_COLOR)
+        return frame
 
 
 def truth(scene: SceneConfig, renderer: Renderer) -> dict[str, object]:

@@ -51,6 +51,10 @@ class TrackerConfig:
             true one (Jensen's inequality) by an amount that grows with the window's width
             squared. A 15-px-wide window drifted 0.7 px/s and biased omega by +3% on a rendered
             cylinder; 5 px wide, 0.06 px/s and +0.3%. Tall windows keep enough texture.
+        blur_sigma_px: Gaussian blur of the tracking image (its pixels). A light blur keeps the
+            narrow window from locking onto static compression blocks and sensor noise: on the
+            accuracy suite sigma 1 took a JPEG-quality-20 clip from -0.82% to -0.34% and a
+            perspective sphere from +0.66% to +0.36%, and left clean clips within 0.05%.
         pyramid_levels: pyramid levels above the base image (each halves the size).
         fb_max_error_px: the largest forward-backward round-trip error a point may have.
         reseed_every: seed new corners every this many frames.
@@ -70,6 +74,7 @@ class TrackerConfig:
     min_distance_px: float = 6.0
     win_width_px: int = 5
     win_height_px: int = 21
+    blur_sigma_px: float = 1.0
     pyramid_levels: int = 3
     fb_max_error_px: float = 0.3
     reseed_every: int = 4
@@ -86,11 +91,14 @@ def tracking_scale(width_px: int, config: TrackerConfig) -> float:
     return min(1.0, config.track_width_px / float(width_px))
 
 
-def tracking_image(image: np.ndarray, scale: float) -> np.ndarray:
-    """Grey, reduced copy of a BGR frame, as the tracker wants it. Cheap enough for the decode thread."""
+def tracking_image(image: np.ndarray, scale: float, blur_sigma_px: float = 0.0) -> np.ndarray:
+    """Grey, reduced (and lightly blurred) copy of a BGR frame, as the tracker wants it. Cheap
+    enough for the decode thread."""
     grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
     if scale < 1.0:
         grey = cv2.resize(grey, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    if blur_sigma_px > 0:
+        grey = cv2.GaussianBlur(grey, (0, 0), blur_sigma_px)
     return grey
 
 
