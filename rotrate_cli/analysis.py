@@ -29,7 +29,7 @@ from rotrate_cli.outliers import (
     judge_fits,
     judge_paper,
 )
-from rotrate_cli.tracking import TrackerConfig, track_frames, tracking_image, tracking_scale
+from rotrate_cli.tracking import VIDEO_BLUR_SIGMA_PX, TrackerConfig, track_frames, tracking_image, tracking_scale
 
 #: Progress callback: (frames done, frames expected or None).
 ProgressCallback = Callable[[int, int | None], None]
@@ -312,6 +312,8 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
 
     scale = tracking_scale(info.width_px, config.tracker)
     blur = config.tracker.blur_sigma_px
+    if blur is None:
+        blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
     frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale, blur))
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))

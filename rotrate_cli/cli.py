@@ -13,6 +13,7 @@ import sys
 import traceback
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, TypeVar
 
@@ -135,6 +136,8 @@ def analyze_command(
                                                             "for perspective (pinhole camera).")] = None,
     focal_px: Annotated[float | None, typer.Option("--focal-px", help="Focal length in pixels, instead of "
                                                                       "--fov.")] = None,
+    blur: Annotated[float | None, typer.Option("--blur", help="Blur (sigma, px) before tracking; default 1 "
+                                                              "for videos, 0 for image sequences.")] = None,
     fmt: FormatOption = "table",
     output: OutputOption = None,
     force: ForceOption = False,
@@ -147,10 +150,12 @@ def analyze_command(
         _check_format(fmt)
         _check_method(method)
         fx, fy = _numbers(fixation, 2, "--fixation", "640,360")
-        tracker = TrackerConfig()
+        if blur is not None and not (math.isfinite(blur) and 0 <= blur <= 20):
+            raise InputError("--blur takes a sigma in pixels between 0 and 20")
+        tracker = TrackerConfig(blur_sigma_px=blur)
         if roi is not None:
             x, y, w, h = _numbers(roi, 4, "--roi", "100,50,400,300")
-            tracker = TrackerConfig(roi=Roi(int(x), int(y), int(w), int(h)))
+            tracker = replace(tracker, roi=Roi(int(x), int(y), int(w), int(h)))
         if output is not None:
             check_output_path(output, force)  # fail before a long run, not after
         config = AnalysisConfig(fixation_px=(fx, fy), fps=fps, start_s=start, end_s=end, every=every,

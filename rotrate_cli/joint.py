@@ -150,7 +150,7 @@ def joint_fit(
         return Combined(omega, math.nan, math.nan, k)
     half = _jackknife_half_width(finite)
     if k >= GROUPS * _MIN_PER_GROUP:
-        arc = np.abs(omega) * ((time_s.max(1) - time_s.min(1)))
+        arc = np.abs(omega) * (time_s.max(1) - time_s.min(1))
         distance = np.abs(offset).sum(1) / n
         groups = [np.array_split(np.argsort(key, kind="stable"), GROUPS) for key in (arc, distance)]
         for relative in (0.05, 0.3):
