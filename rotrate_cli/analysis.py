@@ -9,13 +9,14 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from rotrate_cli import axis as axes
 from rotrate_cli import rates
 from rotrate_cli.decode import FrameSource, prefetch
 from rotrate_cli.errors import InputError, NoResultError
@@ -29,7 +30,15 @@ from rotrate_cli.outliers import (
     judge_fits,
     judge_paper,
 )
-from rotrate_cli.tracking import VIDEO_BLUR_SIGMA_PX, TrackerConfig, track_frames, tracking_image, tracking_scale
+from rotrate_cli.series import rate_series
+from rotrate_cli.tracking import (
+    VIDEO_BLUR_SIGMA_PX,
+    TrackerConfig,
+    TrackingRun,
+    track_frames,
+    tracking_image,
+    tracking_scale,
+)
 
 #: Progress callback: (frames done, frames expected or None).
 ProgressCallback = Callable[[int, int | None], None]
@@ -51,7 +60,10 @@ class AnalysisConfig:
     """Options of one analysis.
 
     Attributes:
-        fixation_px: the fixation point (x = column, y = row) on the rotation axis, in pixels.
+        fixation_px: the fixation point (x = column, y = row) on the rotation axis, in pixels;
+            None to find the axis from the tracks.
+        axis_angle_deg: the axis's angle in the image (0 vertical, positive: top end leaning
+            right); None to find it from the motion.
         fps: frame-rate override in frames per second (required for image sequences).
         start_s, end_s: the time span to analyse, in seconds (``end_s`` None: to the end).
         every: use every N-th frame's positions for the rates (tracking still sees every frame).
@@ -61,10 +73,12 @@ class AnalysisConfig:
         focal_px: the focal length in pixels, instead of ``fov_deg``.
         tracker: tracking settings.
         rejection: outlier-rejection thresholds.
+        window_s: also measure omega(t) over a sliding window this long (None: not).
     """
 
-    fixation_px: tuple[float, float]
+    fixation_px: tuple[float, float] | None
     fps: float | None = None
+    axis_angle_deg: float | None = None
     start_s: float = 0.0
     end_s: float | None = None
     every: int = 1
@@ -73,6 +87,7 @@ class AnalysisConfig:
     focal_px: float | None = None
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
     rejection: RejectionConfig = field(default_factory=RejectionConfig)
+    window_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -94,6 +109,10 @@ class Analysis:
         rejection: the thresholds the verdicts used.
         warnings: things the user should know that did not stop the run.
         position_unit: the unit of positions and offsets (``px`` for videos).
+        axis_angle_deg: the axis's angle in the image (0 vertical, positive: top end right).
+        axis_found: True when the fixation point was found from the tracks.
+        axis_angle_found: True when the angle was found from the motion.
+        series: omega(t) over a sliding window (see :mod:`rotrate_cli.series`), or None.
 
     ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
     a long clip's table is large, and most reports do not need it.
@@ -116,6 +135,10 @@ class Analysis:
     rejection: RejectionConfig = field(default_factory=RejectionConfig)
     warnings: tuple[str, ...] = ()
     position_unit: str = "px"
+    axis_angle_deg: float = 0.0
+    axis_found: bool = False
+    axis_angle_found: bool = False
+    series: pd.DataFrame | None = None
 
     @property
     def rpm(self) -> float:
@@ -139,13 +162,17 @@ class RateResult:
     direction: str
 
 
-def _camera(config: AnalysisConfig, width_px: int) -> rates.Camera | None:
-    fx = config.fixation_px[0]
-    if config.focal_px is not None:
-        return rates.Camera(config.focal_px, (fx - (width_px / 2.0 - 0.5)) / config.focal_px)
-    if config.fov_deg is not None:
-        return rates.Camera.from_fov(config.fov_deg, width_px, fx)
-    return None
+def _camera(config: AnalysisConfig, size_px: tuple[int, int], fixation_px: tuple[float, float],
+            angle_deg: float) -> rates.Camera | None:
+    """The pinhole camera (principal point at the image centre), offsets along ``angle_deg``."""
+    if config.focal_px is None and config.fov_deg is None:
+        return None
+    width_px, height_px = size_px
+    focal_px = config.focal_px if config.focal_px is not None else \
+        (width_px / 2.0) / math.tan(math.radians(config.fov_deg or 0.0) / 2.0)
+    ux, uy = axes.unit_offset(angle_deg)
+    axis_px = (fixation_px[0] - (width_px / 2.0 - 0.5)) * ux + (fixation_px[1] - (height_px / 2.0 - 0.5)) * uy
+    return rates.Camera(focal_px, axis_px / focal_px)
 
 
 def _check_config(config: AnalysisConfig) -> None:
@@ -163,6 +190,11 @@ def _check_config(config: AnalysisConfig) -> None:
         raise InputError("--fov must be a horizontal field of view between 0 and 170 degrees")
     if config.focal_px is not None and not (config.focal_px > 0 and math.isfinite(config.focal_px)):
         raise InputError("--focal-px must be a positive focal length in pixels")
+    if config.window_s is not None and not (math.isfinite(config.window_s) and config.window_s > 0):
+        raise InputError("--window must be a positive number of seconds")
+    if config.axis_angle_deg is not None and not (math.isfinite(config.axis_angle_deg)
+                                                   and -180 <= config.axis_angle_deg <= 180):
+        raise InputError("--axis-angle takes degrees between -180 and 180 (0: a vertical axis)")
     if config.method == "paper" and (config.fov_deg is not None or config.focal_px is not None):
         raise InputError("--method paper is orthographic, as in the paper; drop --fov/--focal-px or use --method fit")
 
@@ -297,12 +329,13 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     _check_config(config)
     video = FrameSource(source, fps=config.fps)
     info = video.info
-    fx, fy = config.fixation_px
-    if not (0 <= fx <= info.width_px - 1 and 0 <= fy <= info.height_px - 1):
-        raise InputError(
-            f"fixation ({fx:g}, {fy:g}) lies outside the {info.width_px}x{info.height_px} frame; "
-            "give X,Y in pixels inside it"
-        )
+    if config.fixation_px is not None:
+        fx, fy = config.fixation_px
+        if not (0 <= fx <= info.width_px - 1 and 0 <= fy <= info.height_px - 1):
+            raise InputError(
+                f"fixation ({fx:g}, {fy:g}) lies outside the {info.width_px}x{info.height_px} frame; "
+                "give X,Y in pixels inside it, or --fixation auto"
+            )
     roi = config.tracker.roi
     if roi is not None and (
         roi.width_px <= 0 or roi.height_px <= 0 or roi.x_px < 0 or roi.y_px < 0
@@ -310,40 +343,116 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     ):
         raise InputError(f"--roi must be X,Y,W,H inside the {info.width_px}x{info.height_px} frame")
 
-    scale = tracking_scale(info.width_px, config.tracker)
-    blur = config.tracker.blur_sigma_px
-    if blur is None:
-        blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
-    frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale, blur))
-    expected = info.frame_count
-    notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
-    run = track_frames(prefetch(frames), (info.width_px, info.height_px), config.tracker, notify)
+    tracker = config.tracker
+    if config.axis_angle_deg is not None and _across(config.axis_angle_deg):
+        tracker = _turned(tracker)
+    run = _track(video, config, tracker, progress)
     count = run.frames
     if count == 0:
         raise InputError(f"no frame of {source} lies between --start and --end")
     if count < 3:
         raise InputError(f"{source} has only {count} frame(s) to analyse; rotation needs at least 3")
+    if run.tracks.empty:
+        raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
+    if config.axis_angle_deg is None and _across(axes.motion_angle_deg(_by_track(run.tracks))):
+        # the motion runs up and down the image: track again with the window turned to suit it
+        run = _track(video, config, _turned(tracker), progress)
+        if run.tracks.empty:
+            raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
+    expected = info.frame_count
     warnings = []
     if expected and config.start_s == 0 and config.end_s is None and count < expected - 1:
         warnings.append(f"decoded {count} of the {expected} frames the file announces; it may be cut off")
 
     duration_s = run.last_time_s - run.first_time_s
-    if run.tracks.empty:
-        raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
-    tracks = _thin(run.tracks, config.every)
-    offsets = pd.DataFrame({
-        "track": tracks["track"].to_numpy() + 1,  # features are numbered from 1, as in the paper
-        "frame": tracks["frame"].to_numpy(),
-        "time_s": tracks["time_s"].to_numpy(),
-        "offset_px": tracks["x_px"].to_numpy(dtype=np.float64) - fx,
-    }, copy=False)
-    del run, tracks  # the offsets are all that is needed from here on: keep the peak low
-    camera = _camera(config, info.width_px)
-    result = rates_from_offsets(offsets, config.method, config.rejection, camera)
+    everything = _by_track(run.tracks)
+    del run
+    angle = config.axis_angle_deg
+    if angle is None:
+        angle = axes.motion_angle_deg(everything)
+        angle = 0.0 if not math.isfinite(angle) else angle
+    if config.fixation_px is None:
+        found = axes.axis_offset_from_recurrence(everything, axes.offsets_along(everything, (0.0, 0.0), angle))
+        if not math.isfinite(found):
+            raise NoResultError("could not find the rotation axis from the motion (too little of a turn); "
+                                "give --fixation X,Y")
+        fixation = axes.point_on_axis(found, angle, everything)
+    else:
+        fixation = (float(config.fixation_px[0]), float(config.fixation_px[1]))
+    tracks = _thin(everything, config.every)
+    del everything  # the offsets are all that is needed from here on: keep the peak low
+
+    def measure(point: tuple[float, float]) -> tuple[RateResult, rates.Camera | None]:
+        offsets = pd.DataFrame({
+            "track": tracks["track"].to_numpy() + 1,  # features are numbered from 1, as in the paper
+            "frame": tracks["frame"].to_numpy(),
+            "time_s": tracks["time_s"].to_numpy(),
+            "offset_px": axes.offsets_along(tracks, point, angle),
+        }, copy=False)
+        camera = _camera(config, (info.width_px, info.height_px), point, angle)
+        return rates_from_offsets(offsets, config.method, config.rejection, camera), camera
+
+    result, camera = measure(fixation)
+    if config.fixation_px is None and config.method == "fit" and camera is None:
+        fixation, result = _refine_fixation(result, fixation, angle, measure)
+    series = None
+    if config.window_s is not None:
+        series = rate_series(result.offsets, config.window_s,
+                             lambda part: rates_from_offsets(part, config.method, config.rejection, camera).combined)
     return _result(result, source=str(source), fps=info.fps, frames=count, duration_s=duration_s,
-                   fixation_px=(float(fx), float(fy)),
+                   fixation_px=(float(fixation[0]), float(fixation[1])),
                    method=config.method if camera is None else f"{config.method}+pinhole(f={camera.focal_px:.1f}px)",
-                   rejection=config.rejection, warnings=tuple(warnings))
+                   rejection=config.rejection, warnings=tuple(warnings), axis_angle_deg=float(angle),
+                   axis_found=config.fixation_px is None, axis_angle_found=config.axis_angle_deg is None,
+                   series=series)
+
+
+def _by_track(tracks: pd.DataFrame) -> pd.DataFrame:
+    return tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True)
+
+
+def _across(angle_deg: float) -> bool:
+    """True when an axis at ``angle_deg`` is nearer horizontal than vertical in the image."""
+    return math.isfinite(angle_deg) and abs(angle_deg) > 45.0
+
+
+def _turned(tracker: TrackerConfig) -> TrackerConfig:
+    """The tracker with its window turned a quarter: narrow across the motion again (see
+    :class:`rotrate_cli.tracking.TrackerConfig`) when points move up and down the image."""
+    return replace(tracker, win_width_px=tracker.win_height_px, win_height_px=tracker.win_width_px)
+
+
+def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
+           progress: ProgressCallback | None) -> TrackingRun:
+    """Decode (in a background thread) and track the frames of ``video`` between start and end."""
+    info = video.info
+    scale = tracking_scale(info.width_px, tracker)
+    blur = tracker.blur_sigma_px
+    if blur is None:
+        blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
+    frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale, blur))
+    expected = info.frame_count
+    notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
+    return track_frames(prefetch(frames), (info.width_px, info.height_px), tracker, notify)
+
+
+def _refine_fixation(
+    result: RateResult, fixation: tuple[float, float], angle_deg: float,
+    measure: Callable[[tuple[float, float]], tuple[RateResult, rates.Camera | None]],
+) -> tuple[tuple[float, float], RateResult]:
+    """Move a found fixation point to the shared-axis least squares of the inlier tracks at the
+    measured rate, and measure again (twice at most: it converges in one step when omega is
+    well determined)."""
+    ux, uy = axes.unit_offset(angle_deg)
+    for _ in range(2):
+        used = result.features.loc[result.features["inlier"], "track"]
+        offsets = result.offsets[result.offsets["track"].isin(used)]
+        shift = axes.refine_axis_offset(offsets, result.combined.omega_rad_s)
+        if not math.isfinite(shift) or abs(shift) < 0.02:
+            break
+        fixation = (fixation[0] + shift * ux, fixation[1] + shift * uy)
+        result, _ = measure(fixation)
+    return fixation, result
 
 
 def _result(rates_result: RateResult, **context: object) -> Analysis:

@@ -25,7 +25,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rotrate_cli import rates
 from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks
 from rotrate_cli.errors import InputError, RotrateError
-from rotrate_cli.report import FORMATS, check_output_path, render, render_table, write_text
+from rotrate_cli.report import FORMATS, check_output_path, render, render_table, series_csv, write_text
 from rotrate_cli.synth import PROJECTIONS, SHAPES, SceneConfig, write_clip
 from rotrate_cli.tracking import Roi, TrackerConfig
 from rotrate_cli.tracks_io import read_tracks
@@ -123,7 +123,8 @@ def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | N
 @app.command("analyze")
 def analyze_command(
     video: Annotated[str, typer.Argument(help="Video file, image folder, or printf pattern like frames/img.%03d.png.")],
-    fixation: Annotated[str, typer.Option("--fixation", help="X,Y pixel of a point on the rotation axis.")],
+    fixation: Annotated[str, typer.Option("--fixation", help="X,Y pixel of a point on the rotation axis, or "
+                                                             "'auto' to find the axis from the motion.")],
     fps: Annotated[
         float | None, typer.Option("--fps", help="Frame rate; overrides the file's, required for images.")
     ] = None,
@@ -136,6 +137,13 @@ def analyze_command(
                                                             "for perspective (pinhole camera).")] = None,
     focal_px: Annotated[float | None, typer.Option("--focal-px", help="Focal length in pixels, instead of "
                                                                       "--fov.")] = None,
+    axis_angle: Annotated[float | None, typer.Option("--axis-angle", help="Axis angle in the image, degrees (0 "
+                                                                        "vertical, + top end right); default: "
+                                                                        "from the motion.")] = None,
+    window: Annotated[float | None, typer.Option("--window", help="Also measure omega(t) over a sliding "
+                                                                  "window of this many seconds.")] = None,
+    series_csv_path: Annotated[Path | None, typer.Option("--series-csv", help="Write omega(t) (needs --window) "
+                                                                               "to this CSV file.")] = None,
     blur: Annotated[float | None, typer.Option("--blur", help="Blur (sigma, px) before tracking; default 1 "
                                                               "for videos, 0 for image sequences.")] = None,
     fmt: FormatOption = "table",
@@ -149,7 +157,7 @@ def analyze_command(
     def job() -> int:
         _check_format(fmt)
         _check_method(method)
-        fx, fy = _numbers(fixation, 2, "--fixation", "640,360")
+        point = None if fixation.strip().lower() == "auto" else _numbers(fixation, 2, "--fixation", "640,360")
         if blur is not None and not (math.isfinite(blur) and 0 <= blur <= 20):
             raise InputError("--blur takes a sigma in pixels between 0 and 20")
         tracker = TrackerConfig(blur_sigma_px=blur)
@@ -158,11 +166,18 @@ def analyze_command(
             tracker = replace(tracker, roi=Roi(int(x), int(y), int(w), int(h)))
         if output is not None:
             check_output_path(output, force)  # fail before a long run, not after
-        config = AnalysisConfig(fixation_px=(fx, fy), fps=fps, start_s=start, end_s=end, every=every,
+        if series_csv_path is not None:
+            if window is None:
+                raise InputError("--series-csv needs --window SECONDS")
+            check_output_path(series_csv_path, force)
+        config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
+                                axis_angle_deg=axis_angle, window_s=window, start_s=start, end_s=end, every=every,
                                 method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker)
         with _progress_bar(quiet) as progress:
             analysis = analyze(video, config, progress)
         _emit(analysis, fmt, output, force)
+        if series_csv_path is not None:
+            write_text(series_csv_path, series_csv(analysis), force)
         for warning in analysis.warnings:
             Console(stderr=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
         return 0

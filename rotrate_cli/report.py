@@ -79,6 +79,12 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
         "frames": analysis.frames,
         "duration_s": _number(analysis.duration_s),
         "fixation": [_number(v, 3) for v in analysis.fixation_px],
+        "axis": {
+            "angle_deg": _number(analysis.axis_angle_deg, 3),
+            "point_px": [_number(v, 3) for v in analysis.fixation_px],
+            "found": analysis.axis_found,
+            "angle_found": analysis.axis_angle_found,
+        },
         "omega": _number(analysis.omega_rad_s),
         "omega_low": _number(analysis.omega_low_rad_s),
         "omega_high": _number(analysis.omega_high_rad_s),
@@ -89,7 +95,22 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
         "rejected": dict(sorted(reasons.items())),
         "warnings": list(analysis.warnings),
         "features": features,
+        **({} if analysis.series is None else {"series": [
+            {"time_s": _number(row.time_s, 6), "omega": _number(row.omega_rad_s),
+             "omega_low": _number(row.omega_low_rad_s), "omega_high": _number(row.omega_high_rad_s),
+             "tracks_used": int(row.tracks_used)}
+            for row in analysis.series.itertuples(index=False)
+        ]}),
     }
+
+
+def series_csv(analysis: Analysis) -> str:
+    """omega(t) as CSV: ``time_s,omega,omega_low,omega_high,tracks_used`` (rad/s)."""
+    series = analysis.series if analysis.series is not None else pd.DataFrame(
+        columns=["time_s", "omega_rad_s", "omega_low_rad_s", "omega_high_rad_s", "tracks_used"])
+    table = series.rename(columns={"omega_rad_s": "omega", "omega_low_rad_s": "omega_low",
+                                   "omega_high_rad_s": "omega_high"})
+    return table.to_csv(index=False, float_format="%.6g", lineterminator="\n")
 
 
 def to_json(analysis: Analysis) -> str:
@@ -110,7 +131,12 @@ def render_table(analysis: Analysis, console: Console) -> None:
     summary.add_row("95% interval", f"{interval} rad/s")
     summary.add_row("direction", analysis.direction)
     fx, fy = analysis.fixation_px
-    summary.add_row("fixation", f"{fx:g}" + ("" if math.isnan(fy) else f", {fy:g}") + f" {analysis.position_unit}")
+    summary.add_row("fixation", f"{fx:.1f}" + ("" if math.isnan(fy) else f", {fy:.1f}") + f" {analysis.position_unit}"
+                    + ("  (found from the tracks)" if analysis.axis_found else ""))
+    if not math.isnan(fy):
+        summary.add_row("axis", f"{analysis.axis_angle_deg:+.2f} deg from vertical (top end "
+                        f"{'right' if analysis.axis_angle_deg >= 0 else 'left'})"
+                        + ("  (found from the motion)" if analysis.axis_angle_found else ""))
     summary.add_row("frames", f"{analysis.frames} over {analysis.duration_s:.2f} s at {analysis.fps:g} fps")
     reasons = Counter(r for r in analysis.features["reason"] if r)
     rejected = ", ".join(f"{n} {why}" for why, n in reasons.most_common()) or "none"

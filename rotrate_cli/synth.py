@@ -1,7 +1,9 @@
 """Deterministic synthetic clips with a known rotation rate: the ground truth for our tests.
 
-A textured solid (box, cylinder or sphere) spins about a vertical axis in front of a static
-textured background and is ray-cast per pixel (supersampled, then area-averaged), under
+A textured solid (box, cylinder or sphere) spins about a vertical axis (optionally speeding up,
+optionally beside a second solid with its own axis and rate, optionally seen by a rolled camera
+so that the axis is tilted in the image) in front of a static textured background and is
+ray-cast per pixel (supersampled, then area-averaged), under
 orthographic or pinhole projection. The object's texture is a solid 3D noise fixed to the
 object, so every surface point carries the same pattern as it turns; a fixed light shades it.
 
@@ -48,6 +50,11 @@ class SceneConfig:
         noise_sigma: standard deviation of added sensor noise, grey levels.
         jpeg_quality: when set (1-100), each frame goes through JPEG at that quality before it
             is written, on top of the video codec: heavy compression, blocks and ringing.
+        alpha_rad_s2: angular acceleration; the rate at time t is ``omega_rad_s + alpha_rad_s2 * t``.
+        roll_deg: camera roll: the axis's top end leans this many degrees to the right of
+            vertical in the image (90: a horizontal axis with its top end to the right).
+        second_shape: a second solid beside the first (None: none), with its own rate
+            ``second_omega_rad_s`` and axis ``second_axis_offset_px`` from the frame centre.
         seed: seeds the textures and the noise: same seed, same clip.
         supersample: rays per pixel along each side (antialiasing).
     """
@@ -65,6 +72,11 @@ class SceneConfig:
     start_angle_rad: float = 0.3
     noise_sigma: float = 0.0
     jpeg_quality: int | None = None
+    alpha_rad_s2: float = 0.0
+    roll_deg: float = 0.0
+    second_shape: str | None = None
+    second_omega_rad_s: float = 1.0
+    second_axis_offset_px: float = 0.0
     seed: int = 0
     supersample: int = 2
 
@@ -75,8 +87,9 @@ class SceneConfig:
 
 
 def _check(scene: SceneConfig) -> None:
-    if scene.shape not in SHAPES:
-        raise InputError(f"unknown shape {scene.shape!r}; use one of {', '.join(SHAPES)}")
+    for shape in (scene.shape, scene.second_shape or scene.shape):
+        if shape not in SHAPES:
+            raise InputError(f"unknown shape {shape!r}; use one of {', '.join(SHAPES)}")
     if scene.projection not in PROJECTIONS:
         raise InputError(f"unknown projection {scene.projection!r}; use one of {', '.join(PROJECTIONS)}")
     if not (scene.fps > 0 and scene.duration_s > 0 and scene.frame_count >= 3):
@@ -87,6 +100,19 @@ def _check(scene: SceneConfig) -> None:
         raise InputError("--jpeg-quality must be between 1 and 100")
     if not 0 < scene.fov_deg < 170:
         raise InputError("--fov must be between 0 and 170 degrees")
+
+
+@dataclass(frozen=True)
+class _Body:
+    """One spinning solid: its shape, rate, acceleration, axis (object units from the centre),
+    solid texture and colour."""
+
+    shape: str
+    omega_rad_s: float
+    alpha_rad_s2: float
+    axis_x: float
+    texture: np.ndarray
+    tint: np.ndarray
 
 
 class Renderer:
@@ -104,35 +130,43 @@ class Renderer:
         self._scale = scene.object_height_fraction * height / (2.0 * half_height)
         self._focal_px = (width / 2.0) / math.tan(math.radians(scene.fov_deg) / 2.0)
         self._distance = self._focal_px / self._scale  # camera distance that gives that scale at the axis
-        self._axis_x = scene.axis_offset_px / self._scale
         u = (np.arange(width * ss) + 0.5) / ss - 0.5
         v = (np.arange(height * ss) + 0.5) / ss - 0.5
         uu, vv = np.meshgrid(u, v)
         self._shape_ss = uu.shape
         n = uu.size
+        # image (right, up) to world (X, Y): the camera is rolled so that world up leans roll_deg right
+        roll = math.radians(scene.roll_deg)
+        right, up = uu.ravel() - self._centre[0], self._centre[1] - vv.ravel()
+        world_x = math.cos(roll) * right - math.sin(roll) * up
+        world_y = math.sin(roll) * right + math.cos(roll) * up
         if scene.projection == "orthographic":
-            origin = np.column_stack([(uu.ravel() - self._centre[0]) / self._scale,
-                                      (self._centre[1] - vv.ravel()) / self._scale,
-                                      np.full(n, 10.0)])
+            origin = np.column_stack([world_x / self._scale, world_y / self._scale, np.full(n, 10.0)])
             direction = np.tile([0.0, 0.0, -1.0], (n, 1))
         else:
-            direction = np.column_stack([(uu.ravel() - self._centre[0]) / self._focal_px,
-                                         (self._centre[1] - vv.ravel()) / self._focal_px,
-                                         -np.ones(n)])
+            direction = np.column_stack([world_x / self._focal_px, world_y / self._focal_px, -np.ones(n)])
             direction /= np.linalg.norm(direction, axis=1, keepdims=True)
             origin = np.tile([0.0, 0.0, self._distance], (n, 1))
-        origin[:, 0] -= self._axis_x  # object frame is centred on the axis
         self._origin, self._direction = origin, direction
-        self._texture = self._solid_texture(rng)
-        self._tint = np.array({"box": (0.55, 0.75, 1.0), "cylinder": (0.5, 1.0, 0.7),
-                               "sphere": (1.0, 0.8, 0.55)}[scene.shape])
+        tints = {"box": (0.55, 0.75, 1.0), "cylinder": (0.5, 1.0, 0.7), "sphere": (1.0, 0.8, 0.55)}
+        self._bodies = [_Body(scene.shape, scene.omega_rad_s, scene.alpha_rad_s2, scene.axis_offset_px / self._scale,
+                              self._solid_texture(rng), np.array(tints[scene.shape]))]
         self._background = self._background_image(rng)
         self._noise_seed = int(rng.integers(0, 2**31))
+        if scene.second_shape is not None:
+            self._bodies.append(_Body(scene.second_shape, scene.second_omega_rad_s, 0.0,
+                                      scene.second_axis_offset_px / self._scale, self._solid_texture(rng),
+                                      np.array(tints[scene.second_shape])[::-1]))
+
+    def axis_px(self, axis_offset_px: float) -> tuple[float, float]:
+        """The pixel where the axis at ``axis_offset_px`` (at the object's mid-height) appears."""
+        roll = math.radians(self.scene.roll_deg)
+        return (self._centre[0] + math.cos(roll) * axis_offset_px, self._centre[1] + math.sin(roll) * axis_offset_px)
 
     @property
     def fixation_px(self) -> tuple[float, float]:
-        """The pixel where the axis point at the object's mid-height appears."""
-        return (self._centre[0] + self.scene.axis_offset_px, self._centre[1])
+        """The pixel where the (first) axis point at the object's mid-height appears."""
+        return self.axis_px(self.scene.axis_offset_px)
 
     @staticmethod
     def _solid_texture(rng: np.random.Generator) -> np.ndarray:
@@ -151,9 +185,9 @@ class Renderer:
         grey = np.clip(0.42 + 0.12 * smooth, 0.0, 1.0)
         return np.stack([grey * 0.95, grey * 0.9, grey * 0.8], axis=-1)
 
-    def _intersect(self, origin: np.ndarray, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    @staticmethod
+    def _intersect(shape: str, origin: np.ndarray, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Distance to the first hit (inf where none) and the surface normal, in object coordinates."""
-        shape = self.scene.shape
         n = len(origin)
         normal = np.zeros((n, 3))
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -204,22 +238,28 @@ class Renderer:
     def render(self, index: int) -> np.ndarray:
         """The BGR uint8 frame ``index``."""
         scene = self.scene
-        angle = scene.start_angle_rad + scene.omega_rad_s * index / scene.fps
-        cos_a, sin_a = math.cos(angle), math.sin(angle)
-        # object-from-world rotation R_y(-angle), applied to row vectors
-        to_object = np.array([[cos_a, 0.0, sin_a], [0.0, 1.0, 0.0], [-sin_a, 0.0, cos_a]])
-        origin = self._origin @ to_object
-        direction = self._direction @ to_object
-        t, normal = self._intersect(origin, direction)
-        hit = np.isfinite(t)
+        time_s = index / scene.fps
         image = self._background.reshape(-1, 3).copy()
-        if hit.any():
+        nearest = np.full(len(self._origin), np.inf)
+        for body in self._bodies:
+            angle = scene.start_angle_rad + body.omega_rad_s * time_s + 0.5 * body.alpha_rad_s2 * time_s**2
+            cos_a, sin_a = math.cos(angle), math.sin(angle)
+            # object-from-world rotation R_y(-angle), applied to row vectors
+            to_object = np.array([[cos_a, 0.0, sin_a], [0.0, 1.0, 0.0], [-sin_a, 0.0, cos_a]])
+            shifted = self._origin - np.array([body.axis_x, 0.0, 0.0])  # object frame centred on its axis
+            origin = shifted @ to_object
+            direction = self._direction @ to_object
+            t, normal = self._intersect(body.shape, origin, direction)
+            hit = np.isfinite(t) & (t < nearest)
+            if not hit.any():
+                continue
+            nearest[hit] = t[hit]
             points = origin[hit] + t[hit, None] * direction[hit]
-            coords = (points + _TEXTURE_EXTENT) / (2 * _TEXTURE_EXTENT) * (self._texture.shape[0] - 1)
-            albedo = ndimage.map_coordinates(self._texture, coords.T, order=1, mode="nearest")
+            coords = (points + _TEXTURE_EXTENT) / (2 * _TEXTURE_EXTENT) * (body.texture.shape[0] - 1)
+            albedo = ndimage.map_coordinates(body.texture, coords.T, order=1, mode="nearest")
             world_normal = normal[hit] @ to_object.T
             shade = 0.6 + 0.4 * np.clip(world_normal @ _LIGHT, 0.0, 1.0)
-            image[hit] = (albedo * shade)[:, None] * self._tint[None, :]
+            image[hit] = (albedo * shade)[:, None] * body.tint[None, :]
         image = image.reshape(*self._shape_ss, 3)
         ss = scene.supersample
         small = cv2.resize(image.astype(np.float32), (scene.width_px, scene.height_px),
@@ -237,14 +277,25 @@ class Renderer:
 
 def truth(scene: SceneConfig, renderer: Renderer) -> dict[str, object]:
     """The ground truth of a rendered clip, as written next to it."""
-    return {
+    record: dict[str, object] = {
         "omega_rad_s": abs(scene.omega_rad_s),
         "direction": "ccw" if scene.omega_rad_s > 0 else "cw",
         "fixation_px": [round(v, 3) for v in renderer.fixation_px],
+        "axis_angle_deg": scene.roll_deg,
         "frames": scene.frame_count,
         "renderer": "rotrate synth",
         "scene": asdict(scene),
     }
+    if scene.alpha_rad_s2:
+        record["alpha_rad_s2"] = scene.alpha_rad_s2 if scene.omega_rad_s >= 0 else -scene.alpha_rad_s2
+    if scene.second_shape is not None:
+        record["bodies"] = [
+            {"omega_rad_s": abs(omega), "direction": "ccw" if omega > 0 else "cw",
+             "axis_px": [round(v, 3) for v in renderer.axis_px(offset)]}
+            for omega, offset in ((scene.omega_rad_s, scene.axis_offset_px),
+                                  (scene.second_omega_rad_s, scene.second_axis_offset_px))
+        ]
+    return record
 
 
 def write_clip(scene: SceneConfig, path: str | Path, force: bool = False) -> dict[str, object]:

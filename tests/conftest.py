@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,17 @@ DINOSAUR = SHARED / "data" / "dinosaur"
 def truth_of(clip: Path) -> dict:
     """The truth JSON written beside a rendered clip."""
     return json.loads(clip.with_suffix(".json").read_text())
+
+
+def direction_seen_as(truth: dict, reported_angle_deg: float) -> str:
+    """The truth's direction as seen from the axis end that ``reported_angle_deg`` calls the top.
+
+    An axis near horizontal has no natural top: rotrate folds angles into (-90, 90], so a clip
+    rendered with its top end to the right (roll 90) may be reported with the top end to the
+    left (-90), and then its sense is read from the other end.
+    """
+    flip = math.cos(math.radians(reported_angle_deg - truth.get("axis_angle_deg", 0.0))) < 0
+    return {"ccw": "cw", "cw": "ccw"}[truth["direction"]] if flip else truth["direction"]
 
 
 def need(path: Path, what: str) -> None:

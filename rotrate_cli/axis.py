@@ -1,0 +1,174 @@
+"""The rotation axis in the image, found from the tracks: its direction and its position.
+
+Direction. Under orthographic projection every point of a body spinning about an axis moves
+along a line perpendicular to the axis's image (under perspective, along a flat ellipse), so the
+dominant direction of all frame-to-frame displacements is the direction in which offsets are
+measured, and the axis is perpendicular to it. Angles follow :func:`unit_offset`: 0 is a
+vertical axis, positive leans the axis's top end to the right (a camera rolled anticlockwise).
+
+Position. The paper's appendix: with the axis at an unknown offset ``o`` along that direction,
+every point obeys ``s'' = -omega^2 (s - o)``. Its exact discrete form at a lag of ``m`` frames,
+``s[k+m] + s[k-m] = kappa s[k] + beta`` with ``kappa = 2 cos(omega m dt)`` and
+``beta = (2 - kappa) o``, is linear, so one robust regression over the triples of all tracks
+gives ``o`` without knowing omega. Once omega is known, ``o`` is refined by the joint least
+squares of all tracks, each ``s = o + A cos(wt) + B sin(wt)`` with its own ``A, B`` and one
+shared ``o`` (closed form).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from rotrate_cli.rates import padded_tracks
+
+#: Triples needed for a regression at one lag, and the largest rotation per lag used (rad):
+#: beyond it the regression's slope saturates.
+_MIN_TRIPLES = 30
+_MAX_TURN_RAD = 1.2
+
+
+@dataclass(frozen=True)
+class Axis:
+    """The rotation axis's image.
+
+    Attributes:
+        angle_deg: 0 vertical; positive leans the top end right (see the module docstring).
+        fixation_px: a point on the axis (x, y in pixels): where the tracked points' mid-height
+            meets it when found, or the point the user gave.
+        found: True when estimated from the tracks, False when given.
+    """
+
+    angle_deg: float
+    fixation_px: tuple[float, float]
+    found: bool = True
+
+
+def unit_offset(angle_deg: float) -> tuple[float, float]:
+    """The image direction (x, y with y down) in which offsets from an axis at ``angle_deg``
+    are measured: to the right for a vertical axis, downwards for ``angle_deg = 90``."""
+    angle = math.radians(angle_deg)
+    return math.cos(angle), math.sin(angle)
+
+
+def offsets_along(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg: float) -> np.ndarray:
+    """Each sample's signed distance from the axis, perpendicular to it, in pixels."""
+    ux, uy = unit_offset(angle_deg)
+    return (tracks["x_px"].to_numpy(dtype=np.float64) - fixation_px[0]) * ux \
+        + (tracks["y_px"].to_numpy(dtype=np.float64) - fixation_px[1]) * uy
+
+
+def motion_angle_deg(tracks: pd.DataFrame) -> float:
+    """The axis angle implied by the tracks' motion (NaN when nothing moves).
+
+    ``tracks``: ``track, frame, x_px, y_px``, sorted by track then frame. The principal
+    direction of the frame-to-frame displacements is the offset direction.
+    """
+    same = (tracks["track"].to_numpy()[1:] == tracks["track"].to_numpy()[:-1])
+    dx = np.diff(tracks["x_px"].to_numpy(dtype=np.float64))[same]
+    dy = np.diff(tracks["y_px"].to_numpy(dtype=np.float64))[same]
+    if len(dx) == 0 or not (np.abs(dx).sum() + np.abs(dy).sum()) > 0:
+        return math.nan
+    scatter = np.array([[dx @ dx, dx @ dy], [dx @ dy, dy @ dy]])
+    values, vectors = np.linalg.eigh(scatter)
+    mx, my = vectors[:, int(np.argmax(values))]
+    angle = math.degrees(math.atan2(my, mx))
+    # the offset direction is defined up to its sign: fold into (-90, 90]
+    if angle <= -90:
+        angle += 180
+    elif angle > 90:
+        angle -= 180
+    return angle
+
+
+def _triples(track: np.ndarray, frame: np.ndarray, position: np.ndarray, lag: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(s[k], s[k+lag] + s[k-lag])`` for every sample with both neighbours ``lag`` frames away
+    on the same track (rows sorted by track then frame, one row per frame)."""
+    n = len(position)
+    if n <= 2 * lag:
+        return np.empty(0), np.empty(0)
+    centre = np.arange(lag, n - lag)
+    ok = (track[centre - lag] == track[centre]) & (track[centre + lag] == track[centre]) \
+        & (frame[centre + lag] - frame[centre] == lag) & (frame[centre] - frame[centre - lag] == lag)
+    centre = centre[ok]
+    return position[centre], position[centre + lag] + position[centre - lag]
+
+
+def _robust_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """Slope and intercept of ``y = kappa x + beta`` by Huber-weighted least squares."""
+    weight = np.ones_like(x)
+    kappa = beta = math.nan
+    for _ in range(6):
+        design = np.column_stack([x, np.ones_like(x)]) * weight[:, None]
+        solution, *_ = np.linalg.lstsq(design, y * weight, rcond=None)
+        kappa, beta = float(solution[0]), float(solution[1])
+        residual = y - kappa * x - beta
+        scale = 1.4826 * float(np.median(np.abs(residual - np.median(residual)))) + 1e-12
+        weight = np.sqrt(np.minimum(1.0, 1.5 * scale / np.maximum(np.abs(residual), 1e-12)))
+    return kappa, beta
+
+
+def axis_offset_from_recurrence(tracks: pd.DataFrame, position: np.ndarray) -> float:
+    """The axis's position along the offset direction (same units as ``position``), from the
+    discrete recurrence pooled over all tracks; NaN when the motion is too small to tell.
+
+    ``tracks`` gives ``track`` and ``frame`` per row (sorted by track then frame); ``position``
+    is each row's coordinate along the offset direction.
+    """
+    track = tracks["track"].to_numpy()
+    frame = tracks["frame"].to_numpy()
+    best = math.nan
+    lag = 1
+    while True:
+        x, y = _triples(track, frame, position, lag)
+        if len(x) < _MIN_TRIPLES:
+            break
+        kappa, beta = _robust_line(x, y)
+        if not (2 * math.cos(_MAX_TURN_RAD) < kappa < 2.0):
+            if kappa <= 2 * math.cos(_MAX_TURN_RAD):
+                break  # turned too far per lag: longer lags only get worse
+            lag *= 2
+            continue
+        best = beta / (2.0 - kappa)
+        lag *= 2
+    return best
+
+
+def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, weights: dict[int, float] | None = None) -> float:
+    """The shared axis offset that, with each track's own amplitude and phase, best explains
+    ``samples`` (``track, time_s, offset_px`` sorted by track then time) at ``omega_rad_s``:
+    the correction to add to the fixation's position along the offset direction."""
+    time_s, offset, mask, ids = padded_tracks(samples)
+    if len(ids) == 0 or not math.isfinite(omega_rad_s):
+        return math.nan
+    weight = mask.astype(float)
+    c, s_ = np.cos(omega_rad_s * time_s) * weight, np.sin(omega_rad_s * time_s) * weight
+    y = offset * weight
+    one = weight
+
+    def residual(v: np.ndarray) -> np.ndarray:
+        """``v`` minus its per-track projection on the cos/sin columns."""
+        a11, a22, a12 = (c * c).sum(1), (s_ * s_).sum(1), (c * s_).sum(1)
+        b1, b2 = (c * v).sum(1), (s_ * v).sum(1)
+        det = a11 * a22 - a12 * a12
+        det = np.where(np.abs(det) > 1e-12, det, np.inf)
+        a, b = (a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det
+        return v - a[:, None] * c - b[:, None] * s_
+
+    ry, r1 = residual(y), residual(one)
+    w = np.ones(len(ids)) if weights is None else np.array([weights.get(int(i), 1.0) for i in ids])
+    denominator = float((w * (r1 * r1).sum(1)).sum())
+    if denominator <= 0:
+        return math.nan
+    return float((w * (r1 * ry).sum(1)).sum()) / denominator
+
+
+def point_on_axis(offset_px: float, angle_deg: float, tracks: pd.DataFrame) -> tuple[float, float]:
+    """The point of the axis at ``offset_px`` (along the offset direction from the image origin)
+    level with the tracked points' median position along the axis."""
+    ux, uy = unit_offset(angle_deg)
+    along = float(np.median(-tracks["x_px"].to_numpy() * uy + tracks["y_px"].to_numpy() * ux))
+    return offset_px * ux - along * uy, offset_px * uy + along * ux

@@ -1,0 +1,131 @@
+"""Beyond the paper's geometry: the axis found from the motion, any axis angle, omega(t)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from rotrate_cli import AnalysisConfig, analyze
+from rotrate_cli import axis as axes
+from rotrate_cli.analysis import rates_from_offsets
+from rotrate_cli.cli import app
+from rotrate_cli.outliers import RejectionConfig
+from rotrate_cli.series import rate_series
+from tests.conftest import DINOSAUR, SAMPLES, direction_seen_as, need, truth_of
+
+
+def _distance_to_axis(point: tuple[float, float], truth: dict, angle_deg: float) -> float:
+    """Pixels from the true axis point to the found axis line."""
+    ux, uy = axes.unit_offset(angle_deg)
+    fx, fy = truth["fixation_px"]
+    return abs((point[0] - fx) * ux + (point[1] - fy) * uy)
+
+
+def _tracks(rng: np.random.Generator, angle_deg: float, axis_px: tuple[float, float], omega: float,
+            alpha: float = 0.0, count: int = 120) -> pd.DataFrame:
+    """Orthographic image tracks of points on a body spinning about an axis at ``angle_deg``."""
+    ux, uy = axes.unit_offset(angle_deg)
+    rows = []
+    for track in range(count):
+        frames = np.arange(int(rng.integers(0, 150)), int(rng.integers(160, 300)))
+        time_s = frames / 30.0
+        radius = rng.uniform(20, 120)
+        along = rng.uniform(-80, 80)
+        offset = radius * np.sin(omega * time_s + 0.5 * alpha * time_s**2 + rng.uniform(0, 2 * np.pi))
+        offset = offset + rng.normal(0, 0.1, len(frames))
+        rows.append(pd.DataFrame({"track": track, "frame": frames, "time_s": time_s,
+                                  "x_px": axis_px[0] + offset * ux - along * uy,
+                                  "y_px": axis_px[1] + offset * uy + along * ux}))
+    return pd.concat(rows, ignore_index=True)
+
+
+@pytest.mark.parametrize("angle", [0.0, 10.0, -35.0, 90.0])
+def test_axis_angle_and_position_from_analytic_tracks(rng: np.random.Generator, angle: float) -> None:
+    tracks = _tracks(rng, angle, (300.0, 200.0), 0.7)
+    found = axes.motion_angle_deg(tracks)
+    assert math.cos(math.radians(found - angle)) == pytest.approx(1.0, abs=1e-4)  # within ~0.8 degree, any sign
+    offset = axes.axis_offset_from_recurrence(tracks, axes.offsets_along(tracks, (0.0, 0.0), found))
+    point = axes.point_on_axis(offset, found, tracks)
+    assert _distance_to_axis(point, {"fixation_px": (300.0, 200.0)}, found) < 0.5
+
+
+def test_refining_the_axis_moves_it_onto_the_truth(rng: np.random.Generator) -> None:
+    tracks = _tracks(rng, 0.0, (300.0, 200.0), 0.7)
+    offsets = pd.DataFrame({"track": tracks["track"], "time_s": tracks["time_s"], "offset_px": tracks["x_px"] - 303.0})
+    assert axes.refine_axis_offset(offsets, 0.7) == pytest.approx(-3.0, abs=0.05)
+
+
+def test_no_motion_gives_no_angle() -> None:
+    still = pd.DataFrame({"track": [1, 1, 1], "frame": [0, 1, 2], "x_px": [5.0] * 3, "y_px": [7.0] * 3})
+    assert math.isnan(axes.motion_angle_deg(still))
+
+
+def test_series_follows_an_analytic_spin_up(rng: np.random.Generator) -> None:
+    tracks = _tracks(rng, 0.0, (0.0, 0.0), 0.3, alpha=0.15, count=200)
+    offsets = pd.DataFrame({"track": tracks["track"], "frame": tracks["frame"], "time_s": tracks["time_s"],
+                            "offset_px": tracks["x_px"]}).sort_values(["track", "time_s"])
+    series = rate_series(offsets, 2.0, lambda part: rates_from_offsets(part, "fit", RejectionConfig()).combined)
+    # tracks here start anywhere in the first 5 s: the first windows hold few, and short
+    whole = series[np.isclose(series["time_s"] % 1.0, 0.0) & (series["time_s"] >= 3.0)]
+    assert len(whole) >= 6
+    truth = 0.3 + 0.15 * whole["time_s"]
+    assert (np.abs(whole["omega_rad_s"] / truth - 1) < 0.03).all()
+
+
+@pytest.mark.parametrize("name", ["box_ortho", "cylinder_ortho", "box_roll10", "cylinder_horizontal"])
+def test_fixation_auto_on_sample_clips(name: str) -> None:
+    clip = SAMPLES / f"{name}.mp4"
+    truth = truth_of(clip)
+    given = analyze(clip, AnalysisConfig(fixation_px=tuple(truth["fixation_px"])))
+    found = analyze(clip, AnalysisConfig(fixation_px=None))
+    assert found.axis_found and found.axis_angle_found
+    error_deg = found.axis_angle_deg - truth.get("axis_angle_deg", 0.0)
+    assert abs(math.sin(math.radians(error_deg))) < math.sin(math.radians(1.0))  # the line within 1 degree
+    assert _distance_to_axis(found.fixation_px, truth, found.axis_angle_deg) < 2.0
+    assert found.omega_rad_s == pytest.approx(given.omega_rad_s, rel=0.01)
+    assert found.omega_rad_s == pytest.approx(truth["omega_rad_s"], rel=0.01)
+    assert found.direction == direction_seen_as(truth, found.axis_angle_deg)
+
+
+def test_given_axis_angle_is_used() -> None:
+    clip = SAMPLES / "box_roll10.mp4"
+    truth = truth_of(clip)
+    result = analyze(clip, AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), axis_angle_deg=10.0))
+    assert result.axis_angle_deg == 10.0 and not result.axis_angle_found
+    assert result.omega_rad_s == pytest.approx(0.5, rel=0.01)
+    assert result.direction == "ccw"
+
+
+def test_spin_up_series_within_three_percent_at_whole_seconds(tmp_path: Path) -> None:
+    clip = SAMPLES / "box_spinup.mp4"
+    truth = truth_of(clip)
+    series_path = tmp_path / "series.csv"
+    result = CliRunner().invoke(app, ["analyze", str(clip), "--fixation", "{},{}".format(*truth["fixation_px"]),
+                                      "--window", "2", "--series-csv", str(series_path), "--format", "json"])
+    assert result.exit_code == 0, result.output
+    series = pd.read_csv(series_path)
+    assert list(series.columns) == ["time_s", "omega", "omega_low", "omega_high", "tracks_used"]
+    whole = series[np.isclose(series["time_s"] % 1.0, 0.0) & (series["time_s"] >= 2.0)]
+    assert len(whole) >= 5
+    rate = truth["scene"]["omega_rad_s"] + truth["alpha_rad_s2"] * whole["time_s"]
+    assert (np.abs(whole["omega"] / rate - 1) < 0.03).all(), whole
+    assert '"series"' in result.stdout
+
+
+def test_series_csv_needs_a_window(tmp_path: Path) -> None:
+    result = CliRunner().invoke(app, ["analyze", str(SAMPLES / "box_ortho.mp4"), "--fixation", "auto",
+                                      "--series-csv", str(tmp_path / "s.csv")])
+    assert result.exit_code == 2
+    assert "--window" in result.output
+
+
+def test_dinosaur_with_fixation_auto_within_two_percent() -> None:
+    need(DINOSAUR / "frames", "the dinosaur photographs")
+    result = analyze(DINOSAUR / "frames", AnalysisConfig(fixation_px=None, fps=1.0))
+    assert result.omega_rad_s == pytest.approx(0.17453, rel=0.02)
+    assert result.direction == "cw"
