@@ -380,15 +380,21 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     else:
         fixation = (float(config.fixation_px[0]), float(config.fixation_px[1]))
     tracks = _thin(everything, config.every)
-    del everything  # the offsets are all that is needed from here on: keep the peak low
+    del everything
+    base = pd.DataFrame({
+        "track": tracks["track"].to_numpy() + 1,  # features are numbered from 1, as in the paper
+        "frame": tracks["frame"].to_numpy(),
+        "time_s": tracks["time_s"].to_numpy(),
+    }, copy=False)
+    # positions are kept only while the fixation may still move: keep the peak low
+    positions = tracks[["x_px", "y_px"]] if config.fixation_px is None else None
+    first_offsets = axes.offsets_along(tracks, fixation, angle)
+    del tracks
 
     def measure(point: tuple[float, float]) -> tuple[RateResult, rates.Camera | None]:
-        offsets = pd.DataFrame({
-            "track": tracks["track"].to_numpy() + 1,  # features are numbered from 1, as in the paper
-            "frame": tracks["frame"].to_numpy(),
-            "time_s": tracks["time_s"].to_numpy(),
-            "offset_px": axes.offsets_along(tracks, point, angle),
-        }, copy=False)
+        moved = positions is not None and point != fixation
+        offset = axes.offsets_along(positions, point, angle) if moved else first_offsets
+        offsets = base.assign(offset_px=offset)
         camera = _camera(config, (info.width_px, info.height_px), point, angle)
         return rates_from_offsets(offsets, config.method, config.rejection, camera), camera
 

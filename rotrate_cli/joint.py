@@ -37,6 +37,8 @@ from rotrate_cli.rates import Camera, padded_tracks
 #: Grid points per refinement pass, and the number of passes.
 _GRID_POINTS = 41
 _PASSES = 3
+#: Tracks per block when evaluating misfits (bounds the temporaries' memory).
+_CHUNK_TRACKS = 256
 #: Groups per split for the grouped jackknife, and the fewest tracks per group it needs.
 GROUPS = 5
 _MIN_PER_GROUP = 3
@@ -126,8 +128,14 @@ def joint_fit(
     inverse_variance = np.array([1.0 / max(noise.get(int(i), 1.0), 1e-6) ** 2 for i in ids])
 
     def misfits(grid: np.ndarray) -> np.ndarray:
+        # in chunks of tracks: the temporaries stay the same size however long the clip
         signed = 1.0 if camera is None or sense >= 0 else -1.0
-        return np.column_stack([_misfits(time_s, offset, weight, signed * w, camera) for w in grid])
+        out = np.empty((k, len(grid)))
+        for start in range(0, k, _CHUNK_TRACKS):
+            part = slice(start, start + _CHUNK_TRACKS)
+            for j, w in enumerate(grid):
+                out[part, j] = _misfits(time_s[part], offset[part], weight[part], signed * w, camera)
+        return out
 
     # fixed effects: every track weighted by its own noise
     found = _search(misfits, inverse_variance, omega_guess_rad_s, span)
@@ -153,8 +161,8 @@ def joint_fit(
         arc = np.abs(omega) * (time_s.max(1) - time_s.min(1))
         distance = np.abs(offset).sum(1) / n
         groups = [np.array_split(np.argsort(key, kind="stable"), GROUPS) for key in (arc, distance)]
-        for relative in (0.05, 0.3):
-            grid = np.linspace(omega * (1 - relative), omega * (1 + relative), 201)
+        for relative, points in ((0.06, 25), (0.3, 61)):
+            grid = np.linspace(omega * (1 - relative), omega * (1 + relative), points)
             weighted = misfits(grid) * weights[:, None]
             estimates = [_delete_one_group(grid, weighted, split) for split in groups]
             if all(np.isfinite(e).all() for e in estimates):
