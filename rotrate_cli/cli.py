@@ -157,7 +157,7 @@ def analyze_command(
     def job() -> int:
         _check_format(fmt)
         _check_method(method)
-        point = None if fixation.strip().lower() == "auto" else _numbers(fixation, 2, "--fixation", "640,360")
+        point = None if fixation.strip().lower() == "auto" else _numbers(fixation, 2, "--fixation", "640,360 (or auto)")
         if blur is not None and not (math.isfinite(blur) and 0 <= blur <= 20):
             raise InputError("--blur takes a sigma in pixels between 0 and 20")
         tracker = TrackerConfig(blur_sigma_px=blur)
