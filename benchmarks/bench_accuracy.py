@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from rotrate_cli import AnalysisConfig, analyze  # noqa: E402
-from rotrate_cli.analysis import _thin, rates_from_offsets  # noqa: E402
+from rotrate_cli.analysis import rates_from_offsets, thin  # noqa: E402
 from rotrate_cli.outliers import RejectionConfig  # noqa: E402
 from rotrate_cli.synth import SceneConfig, write_clip  # noqa: E402
 
@@ -101,7 +101,7 @@ def measure(condition: Condition) -> dict[str, object]:
     ours = analyze(path, AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), every=condition.every, fov_deg=fov))
     seconds = time.perf_counter() - started
     step = max(1, round(PAPER_STEP_S * condition.scene.fps / condition.every))
-    paper = rates_from_offsets(_thin(ours.offsets, step * condition.every), "paper", RejectionConfig()).combined
+    paper = rates_from_offsets(thin(ours.offsets, step * condition.every), "paper", RejectionConfig()).combined
     true_omega = float(truth["omega_rad_s"])
     return {
         "condition": condition.name,

@@ -168,8 +168,8 @@ def _camera(config: AnalysisConfig, size_px: tuple[int, int], fixation_px: tuple
     if config.focal_px is None and config.fov_deg is None:
         return None
     width_px, height_px = size_px
-    focal_px = config.focal_px if config.focal_px is not None else \
-        (width_px / 2.0) / math.tan(math.radians(config.fov_deg or 0.0) / 2.0)
+    focal_px = config.focal_px if config.focal_px is not None else rates.focal_px_from_fov(config.fov_deg or 0.0,
+                                                                                           width_px)
     ux, uy = axes.unit_offset(angle_deg)
     axis_px = (fixation_px[0] - (width_px / 2.0 - 0.5)) * ux + (fixation_px[1] - (height_px / 2.0 - 0.5)) * uy
     return rates.Camera(focal_px, axis_px / focal_px)
@@ -199,7 +199,8 @@ def _check_config(config: AnalysisConfig) -> None:
         raise InputError("--method paper is orthographic, as in the paper; drop --fov/--focal-px or use --method fit")
 
 
-def _thin(tracks: pd.DataFrame, every: int) -> pd.DataFrame:
+def thin(tracks: pd.DataFrame, every: int) -> pd.DataFrame:
+    """Every ``every``-th frame's rows, counted from the first frame (the paper's sampling)."""
     if every == 1 or tracks.empty:
         return tracks
     first = int(tracks["frame"].min())
@@ -354,23 +355,25 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         raise InputError(f"{source} has only {count} frame(s) to analyse; rotation needs at least 3")
     if run.tracks.empty:
         raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
-    if config.axis_angle_deg is None and _across(axes.motion_angle_deg(_by_track(run.tracks))):
-        # the motion runs up and down the image: track again with the window turned to suit it
-        run = _track(video, config, _turned(tracker), progress)
-        if run.tracks.empty:
-            raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
+    everything = _by_track(run.tracks)
+    angle = config.axis_angle_deg
+    if angle is None:
+        angle = axes.motion_angle_deg(everything)
+        if _across(angle):
+            # the motion runs up and down the image: track again with the window turned to suit it
+            run = _track(video, config, _turned(tracker), progress)
+            if run.tracks.empty:
+                raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
+            everything = _by_track(run.tracks)
+            angle = axes.motion_angle_deg(everything)
+        angle = angle if math.isfinite(angle) else 0.0
     expected = info.frame_count
     warnings = []
     if expected and config.start_s == 0 and config.end_s is None and count < expected - 1:
         warnings.append(f"decoded {count} of the {expected} frames the file announces; it may be cut off")
 
     duration_s = run.last_time_s - run.first_time_s
-    everything = _by_track(run.tracks)
     del run
-    angle = config.axis_angle_deg
-    if angle is None:
-        angle = axes.motion_angle_deg(everything)
-        angle = 0.0 if not math.isfinite(angle) else angle
     if config.fixation_px is None:
         found = axes.axis_offset_from_recurrence(everything, axes.offsets_along(everything, (0.0, 0.0), angle))
         if not math.isfinite(found):
@@ -379,7 +382,7 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         fixation = axes.point_on_axis(found, angle, everything)
     else:
         fixation = (float(config.fixation_px[0]), float(config.fixation_px[1]))
-    tracks = _thin(everything, config.every)
+    tracks = thin(everything, config.every)
     del everything
     base = pd.DataFrame({
         "track": tracks["track"].to_numpy() + 1,  # features are numbered from 1, as in the paper
@@ -523,7 +526,7 @@ def analyze_tracks(
         fps = _rate_from_times(table)
     if table.groupby("track")["time_s"].apply(lambda t: bool((np.diff(t.to_numpy()) <= 0).any())).any():
         raise InputError("times must increase along each track")
-    offsets = _thin(table, every).assign(offset_px=lambda t: t["position"] - fixation)
+    offsets = thin(table, every).assign(offset_px=lambda t: t["position"] - fixation)
     # Given tracks are taken at their word: no tracker-jitter floor, and 5 samples (the fewest
     # that leave the three-parameter fit two degrees of freedom) are a track; published tracks
     # are often sparse keyframes (the dinosaur's: most span 5-7 views 10 degrees apart).

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from rotrate_cli.rates import padded_tracks
+from rotrate_cli.rates import padded_tracks, two_column_fit
 
 #: Triples needed for a regression at one lag, and the largest rotation per lag used (rad):
 #: beyond it the regression's slope saturates.
@@ -137,7 +137,7 @@ def axis_offset_from_recurrence(tracks: pd.DataFrame, position: np.ndarray) -> f
     return best
 
 
-def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, weights: dict[int, float] | None = None) -> float:
+def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float) -> float:
     """The shared axis offset that, with each track's own amplitude and phase, best explains
     ``samples`` (``track, time_s, offset_px`` sorted by track then time) at ``omega_rad_s``:
     the correction to add to the fixation's position along the offset direction."""
@@ -151,19 +151,14 @@ def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, weights: dict[
 
     def residual(v: np.ndarray) -> np.ndarray:
         """``v`` minus its per-track projection on the cos/sin columns."""
-        a11, a22, a12 = (c * c).sum(1), (s_ * s_).sum(1), (c * s_).sum(1)
-        b1, b2 = (c * v).sum(1), (s_ * v).sum(1)
-        det = a11 * a22 - a12 * a12
-        det = np.where(np.abs(det) > 1e-12, det, np.inf)
-        a, b = (a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det
+        a, b = two_column_fit(c, s_, v)
         return v - a[:, None] * c - b[:, None] * s_
 
     ry, r1 = residual(y), residual(one)
-    w = np.ones(len(ids)) if weights is None else np.array([weights.get(int(i), 1.0) for i in ids])
-    denominator = float((w * (r1 * r1).sum(1)).sum())
+    denominator = float((r1 * r1).sum())
     if denominator <= 0:
         return math.nan
-    return float((w * (r1 * ry).sum(1)).sum()) / denominator
+    return float((r1 * ry).sum()) / denominator
 
 
 def point_on_axis(offset_px: float, angle_deg: float, tracks: pd.DataFrame) -> tuple[float, float]:

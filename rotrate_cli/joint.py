@@ -32,7 +32,7 @@ import pandas as pd
 from scipy.special import stdtrit
 
 from rotrate_cli.outliers import Combined
-from rotrate_cli.rates import Camera, padded_tracks
+from rotrate_cli.rates import Camera, padded_tracks, two_column_fit
 
 #: Grid points per refinement pass, and the number of passes.
 _GRID_POINTS = 41
@@ -62,12 +62,7 @@ def _misfits(
         target, first, second = x - camera.axis_n, c - x * s_, s_ + x * c
     w = weight
     for _ in range(1 if camera is None else 2):
-        f1, f2, y = first * w, second * w, target * w
-        a11, a22, a12 = (f1 * f1).sum(1), (f2 * f2).sum(1), (f1 * f2).sum(1)
-        b1, b2 = (f1 * y).sum(1), (f2 * y).sum(1)
-        det = a11 * a22 - a12 * a12
-        det = np.where(np.abs(det) > 1e-300, det, 1e-300)
-        a, b = (a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det
+        a, b = two_column_fit(first * w, second * w, target * w)
         if camera is not None:
             depth = -a[:, None] * s_ + b[:, None] * c
             w = weight / np.maximum(np.abs(1.0 - depth), 1e-3)

@@ -66,11 +66,21 @@ class Camera:
     focal_px: float
     axis_n: float
 
-    @staticmethod
-    def from_fov(fov_deg: float, width_px: int, fixation_x_px: float) -> Camera:
-        """The camera of a horizontal field of view, principal point at the image centre."""
-        focal_px = (width_px / 2.0) / math.tan(math.radians(fov_deg) / 2.0)
-        return Camera(focal_px, (fixation_x_px - (width_px / 2.0 - 0.5)) / focal_px)
+
+
+def focal_px_from_fov(fov_deg: float, width_px: int) -> float:
+    """The focal length in pixels of a horizontal field of view ``fov_deg`` over ``width_px``."""
+    return (width_px / 2.0) / math.tan(math.radians(fov_deg) / 2.0)
+
+
+def two_column_fit(first: np.ndarray, second: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per row, the least-squares ``a, b`` of ``y ~ a first + b second`` (rows of padded tracks,
+    padding zeroed in all three); ``0, 0`` where the two columns are degenerate."""
+    a11, a22, a12 = (first * first).sum(1), (second * second).sum(1), (first * second).sum(1)
+    b1, b2 = (first * y).sum(1), (second * y).sum(1)
+    det = a11 * a22 - a12 * a12
+    det = np.where(np.abs(det) > 1e-300, det, np.inf)
+    return (a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det
 
 
 _FAILED = TrackFit(math.nan, math.nan, math.nan, math.nan, math.nan)
