@@ -298,7 +298,7 @@ def _joint(
     senses = used["sense"].to_numpy(dtype=float)
     sense = float(np.sign(np.nansum(senses))) if np.isfinite(senses).any() else 1.0
     spread = (pooled.omega_high_rad_s - pooled.omega_low_rad_s) / pooled.omega_rad_s
-    joint = joint_fit(offsets[offsets["track"].isin(used["track"])], dict(zip(used["track"], noise_px, strict=True)),
+    joint = joint_fit(offsets, dict(zip(used["track"], noise_px, strict=True)),
                       pooled.omega_rad_s, span=float(np.clip(2 * spread, 0.02, 0.5)) if math.isfinite(spread) else 0.2,
                       camera=camera, sense=sense or 1.0)
     if not math.isfinite(joint.omega_rad_s):
@@ -439,7 +439,8 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     blur = tracker.blur_sigma_px
     if blur is None:
         blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
-    frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale, blur))
+    frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale, blur),
+                          grey=True)
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
     return track_frames(prefetch(frames), (info.width_px, info.height_px), tracker, notify)

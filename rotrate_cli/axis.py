@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from rotrate_cli.rates import padded_tracks, two_column_fit
+from rotrate_cli.ragged import Ragged
+from rotrate_cli.rates import solve_two_columns
 
 #: Triples needed for a regression at one lag, and the largest rotation per lag used (rad):
 #: beyond it the regression's slope saturates.
@@ -140,25 +141,30 @@ def axis_offset_from_recurrence(tracks: pd.DataFrame, position: np.ndarray) -> f
 def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float) -> float:
     """The shared axis offset that, with each track's own amplitude and phase, best explains
     ``samples`` (``track, time_s, offset_px`` sorted by track then time) at ``omega_rad_s``:
-    the correction to add to the fixation's position along the offset direction."""
-    time_s, offset, mask, ids = padded_tracks(samples)
-    if len(ids) == 0 or not math.isfinite(omega_rad_s):
+    the correction to add to the fixation's position along the offset direction.
+
+    Per track, with ``P`` the projection on the ``cos(wt), sin(wt)`` columns, the least squares
+    of ``offset - o ~ a cos + b sin`` over a shared ``o`` is
+    ``o = sum 1.(I - P) offset / sum 1.(I - P) 1``.
+    """
+    tracks = Ragged.from_samples(samples)
+    if len(tracks) == 0 or not math.isfinite(omega_rad_s):
         return math.nan
-    weight = mask.astype(float)
-    c, s_ = np.cos(omega_rad_s * time_s) * weight, np.sin(omega_rad_s * time_s) * weight
-    y = offset * weight
-    one = weight
+    angle = omega_rad_s * tracks.times_s
+    c, s_ = np.cos(angle)[tracks.time_index], np.sin(angle)[tracks.time_index]
+    sums = tracks.sums
+    cc, ss, cs, sum_c, sum_s = sums(c * c), sums(s_ * s_), sums(c * s_), sums(c), sums(s_)
 
-    def residual(v: np.ndarray) -> np.ndarray:
-        """``v`` minus its per-track projection on the cos/sin columns."""
-        a, b = two_column_fit(c, s_, v)
-        return v - a[:, None] * c - b[:, None] * s_
+    def unexplained_dot_one(sum_v: np.ndarray, sum_cv: np.ndarray, sum_sv: np.ndarray) -> float:
+        """``sum over tracks of 1.(I - P) v`` from the sums of ``v``, ``c v`` and ``s v``."""
+        a, b = solve_two_columns(cc, ss, cs, sum_cv, sum_sv)
+        return float((sum_v - a * sum_c - b * sum_s).sum())
 
-    ry, r1 = residual(y), residual(one)
-    denominator = float((r1 * r1).sum())
+    y = tracks.offset
+    denominator = unexplained_dot_one(tracks.counts.astype(float), sum_c, sum_s)
     if denominator <= 0:
         return math.nan
-    return float((r1 * ry).sum()) / denominator
+    return unexplained_dot_one(sums(y), sums(c * y), sums(s_ * y)) / denominator
 
 
 def point_on_axis(offset_px: float, angle_deg: float, tracks: pd.DataFrame) -> tuple[float, float]:

@@ -32,43 +32,53 @@ import pandas as pd
 from scipy.special import stdtrit
 
 from rotrate_cli.outliers import Combined
-from rotrate_cli.rates import Camera, padded_tracks, two_column_fit
+from rotrate_cli.rates import Camera, solve_two_columns
+from rotrate_cli.ragged import Ragged
 
-#: Grid points per refinement pass, and the number of passes.
-_GRID_POINTS = 41
-_PASSES = 3
-#: Tracks per block when evaluating misfits (bounds the temporaries' memory).
-_CHUNK_TRACKS = 256
+#: Grid points of the search for the minimum, and the relative grid step at which it stops.
+_SEARCH_POINTS = 13
+_SEARCH_STEP = 0.02
+#: The grid on which every track's misfit is kept for the jackknives: relative half-width and
+#: points; and the wider one used when leaving tracks out moves the minimum off it.
+_GRID = (0.06, 25)
+_WIDE_GRID = (0.3, 61)
+#: Relative steps of the parabola polishing the summed misfit's minimum.
+_POLISH_STEPS = (1e-3, 2e-4)
+#: Samples per block when evaluating misfits (bounds the temporaries' memory).
+_BLOCK_SAMPLES = 1 << 14
 #: Groups per split for the grouped jackknife, and the fewest tracks per group it needs.
 GROUPS = 5
 _MIN_PER_GROUP = 3
 
 
-def _misfits(
-    time_s: np.ndarray, offset: np.ndarray, weight: np.ndarray, omega_rad_s: float, camera: Camera | None
-) -> np.ndarray:
-    """Each padded track's least squared misfit (in the offsets' units squared) at one rate.
+def _block_misfits(block: Ragged, cos_t: np.ndarray, sin_t: np.ndarray, camera: Camera | None) -> np.ndarray:
+    """Each track's least squared misfit (in the offsets' units squared) at one rate, given the
+    rate's ``cos``/``sin`` at the distinct sample times.
 
     Orthographic: ``offset = A cos(wt) + B sin(wt)``. Pinhole (normalised coordinates ``x``,
     see :func:`rotrate_cli.rates._pinhole`): ``x (1 - Z) = axis_n + L`` is linear in ``A, B``;
     solved once unweighted, then again with weights ``1 / (1 - Z)^2`` so that the misfit is
-    the geometric one.
+    the geometric one. Times need no centring: shifting them turns the two columns into
+    combinations of each other, which leaves the misfit unchanged.
     """
-    c, s_ = np.cos(omega_rad_s * time_s), np.sin(omega_rad_s * time_s)
+    c, s_ = cos_t[block.time_index], sin_t[block.time_index]
+    sums = block.sums
     if camera is None:
-        target, first, second = offset, c, s_
+        target, first, second = block.offset, c, s_
     else:
-        x = offset / camera.focal_px + camera.axis_n
-        target, first, second = x - camera.axis_n, c - x * s_, s_ + x * c
-    w = weight
-    for _ in range(1 if camera is None else 2):
-        a, b = two_column_fit(first * w, second * w, target * w)
-        if camera is not None:
-            depth = -a[:, None] * s_ + b[:, None] * c
-            w = weight / np.maximum(np.abs(1.0 - depth), 1e-3)
-    residual = (target - a[:, None] * first - b[:, None] * second) * w
-    scale = 1.0 if camera is None else camera.focal_px
-    return (residual**2).sum(1) * scale**2
+        target = block.offset / camera.focal_px
+        x = target + camera.axis_n
+        first, second = c - x * s_, s_ + x * c
+    weight2: np.ndarray | float = 1.0
+    for iteration in range(1 if camera is None else 2):
+        if iteration:
+            depth = -block.spread(a) * s_ + block.spread(b) * c
+            weight2 = 1.0 / np.maximum(np.abs(1.0 - depth), 1e-3) ** 2
+        wf, ws = first * weight2, second * weight2
+        b1, b2 = sums(wf * target), sums(ws * target)
+        a, b = solve_two_columns(sums(wf * first), sums(ws * second), sums(wf * second), b1, b2)
+    misfit = np.maximum(sums(target * target * weight2) - a * b1 - b * b2, 0.0)
+    return misfit if camera is None else misfit * camera.focal_px**2
 
 
 def _parabola_minimum(grid: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -86,6 +96,11 @@ def _parabola_minimum(grid: np.ndarray, values: np.ndarray) -> np.ndarray:
     return np.where(inside, grid[i] + np.clip(shift, -1.0, 1.0) * step, np.nan)
 
 
+def _relative_grid(omega: float, half_width_and_points: tuple[float, int]) -> np.ndarray:
+    half_width, points = half_width_and_points
+    return np.linspace(omega * (1 - half_width), omega * (1 + half_width), points)
+
+
 def joint_fit(
     samples: pd.DataFrame,
     noise: dict[int, float],
@@ -95,14 +110,14 @@ def joint_fit(
     sense: float = 1.0,
 ) -> Combined:
     """The rate shared by the tracks of ``samples`` (columns ``track, time_s, offset_px``,
-    sorted by track then time).
+    sorted by track then time) that ``noise`` lists.
 
     Args:
-        samples: the inlier tracks' offsets.
+        samples: the tracks' offsets (other tracks may be present: only those in ``noise`` count).
         noise: each track's noise standard deviation (the offsets' units); tracks weigh
             ``1 / noise^2``.
         omega_guess_rad_s: where to centre the search (for example the mean of per-track rates).
-        span: the search covers ``omega_guess * (1 +- span)`` (and is widened when the minimum
+        span: the search covers ``omega_guess * (1 +- span)`` (and moves on when the minimum
             sits on its edge).
         camera: a pinhole camera for perspective fits, or None for orthographic.
         sense: with a camera, +1 for anticlockwise rotation, -1 for clockwise.
@@ -110,42 +125,40 @@ def joint_fit(
     Returns:
         The joint rate and its interval; NaN throughout when no minimum could be found.
     """
-    time_s, offset, mask, ids = padded_tracks(samples)
-    k = len(ids)
+    tracks = Ragged.from_samples(samples, np.fromiter(noise, dtype=np.int64, count=len(noise)))
+    k = len(tracks)
     failed = Combined(math.nan, math.nan, math.nan, k)
     if k == 0 or not math.isfinite(omega_guess_rad_s) or omega_guess_rad_s <= 0:
         return failed
-    weight = mask.astype(float)
-    n = weight.sum(1)
-    centre_s = (time_s * weight).sum(1) / n
-    time_s = (time_s - centre_s[:, None]) * weight
-    offset = offset * weight
-    inverse_variance = np.array([1.0 / max(noise.get(int(i), 1.0), 1e-6) ** 2 for i in ids])
+    weights = np.array([1.0 / max(noise[int(i)], 1e-6) ** 2 for i in tracks.ids])
+    signed = 1.0 if camera is None or sense >= 0 else -1.0
 
     def misfits(grid: np.ndarray) -> np.ndarray:
-        # in chunks of tracks: the temporaries stay the same size however long the clip
-        signed = 1.0 if camera is None or sense >= 0 else -1.0
         out = np.empty((k, len(grid)))
-        for start in range(0, k, _CHUNK_TRACKS):
-            part = slice(start, start + _CHUNK_TRACKS)
-            for j, w in enumerate(grid):
-                out[part, j] = _misfits(time_s[part], offset[part], weight[part], signed * w, camera)
+        for j, omega_j in enumerate(grid):
+            angle = signed * omega_j * tracks.times_s
+            cos_t, sin_t = np.cos(angle), np.sin(angle)
+            for part, block in tracks.blocks(_BLOCK_SAMPLES):
+                out[part, j] = _block_misfits(block, cos_t, sin_t, camera)
         return out
 
-    # fixed effects: every track weighted by its own noise
-    found = _search(misfits, inverse_variance, omega_guess_rad_s, span)
-    if found is None:
+    rough = _locate(misfits, weights, omega_guess_rad_s, span)
+    if not math.isfinite(rough):
         return failed
-    grid, curves, omega = found
+    grid = _relative_grid(rough, _GRID)
+    curves = misfits(grid)
+    weighted = curves * weights[:, None]
+    omega = float(_parabola_minimum(grid, weighted.sum(0)[None, :])[0])
+    if not math.isfinite(omega):
+        return failed
+    omega = _polish(lambda trial: float((weights @ misfits(trial))[0]), omega)
     if k == 1:
         # one track: the curvature of its misfit, scaled by its own residual variance
-        return _single(grid, curves[0] * inverse_variance[0], omega, float(n[0]))
-    weights = inverse_variance
-    weighted = curves * weights[:, None]
+        return _single(grid, weighted[0], omega, float(tracks.counts[0]))
     leave_one_out = _parabola_minimum(grid, weighted.sum(0)[None, :] - weighted)
     if not np.isfinite(leave_one_out).all():
-        # a track whose removal moves the minimum off the fine grid: a wider grid
-        grid = np.linspace(omega * 0.8, omega * 1.2, 4 * _GRID_POINTS + 1)
+        # a track whose removal moves the minimum off the grid: a wider one
+        grid = _relative_grid(omega, _WIDE_GRID)
         weighted = misfits(grid) * weights[:, None]
         leave_one_out = _parabola_minimum(grid, weighted.sum(0)[None, :] - weighted)
     finite = leave_one_out[np.isfinite(leave_one_out)]
@@ -153,12 +166,15 @@ def joint_fit(
         return Combined(omega, math.nan, math.nan, k)
     half = _jackknife_half_width(finite)
     if k >= GROUPS * _MIN_PER_GROUP:
-        arc = np.abs(omega) * (time_s.max(1) - time_s.min(1))
-        distance = np.abs(offset).sum(1) / n
+        time_s = tracks.time_s
+        duration_s = np.maximum.reduceat(time_s, tracks.starts) - np.minimum.reduceat(time_s, tracks.starts)
+        arc = np.abs(omega) * duration_s
+        distance = tracks.sums(np.abs(tracks.offset)) / tracks.counts
         groups = [np.array_split(np.argsort(key, kind="stable"), GROUPS) for key in (arc, distance)]
-        for relative, points in ((0.06, 25), (0.3, 61)):
-            grid = np.linspace(omega * (1 - relative), omega * (1 + relative), points)
-            weighted = misfits(grid) * weights[:, None]
+        for wider in (False, True):
+            if wider:
+                grid = _relative_grid(omega, _WIDE_GRID)
+                weighted = misfits(grid) * weights[:, None]
             estimates = [_delete_one_group(grid, weighted, split) for split in groups]
             if all(np.isfinite(e).all() for e in estimates):
                 half = max(half, *(_jackknife_half_width(e) for e in estimates))
@@ -181,29 +197,42 @@ def _delete_one_group(grid: np.ndarray, weighted: np.ndarray, groups: list[np.nd
     return _parabola_minimum(grid, np.array([total - weighted[g].sum(0) for g in groups]))
 
 
-def _search(
+def _locate(
     misfits: Callable[[np.ndarray], np.ndarray], weights: np.ndarray, guess: float, span: float
-) -> tuple[np.ndarray, np.ndarray, float] | None:
-    """Minimise ``weights @ misfits(omega)``: grid, zoom in, parabola. Returns the last grid,
-    the tracks' misfits on it and the minimum, or None."""
+) -> float:
+    """Roughly (to a few percent) where ``weights @ misfits(omega)`` is least: a grid over
+    ``guess * (1 +- span)`` that moves while the minimum sits on its edge and zooms in until its
+    step is fine enough; NaN when it finds none."""
     low, high = guess * max(1.0 - span, 0.05), guess * (1.0 + span)
     floor = guess * 0.05
-    for _ in range(_PASSES + 6):
-        grid = np.linspace(low, high, _GRID_POINTS)
-        curves = misfits(grid)
-        total = weights @ curves
+    last = _SEARCH_POINTS - 1
+    for _ in range(12):
+        grid = np.linspace(low, high, _SEARCH_POINTS)
+        total = weights @ misfits(grid)
         best = int(np.argmin(total))
         step = grid[1] - grid[0]
         if best == 0 and low > floor:
             low, high = max(low - (high - low), floor), low + 2 * step
-        elif best == _GRID_POINTS - 1:
+        elif best == last:
             low, high = high - 2 * step, high + (high - low)
-        elif step / grid[best] > 2e-4:
-            low, high = grid[best] - 3 * step, grid[best] + 3 * step
+        elif best == 0:
+            return math.nan  # the minimum runs down to (nearly) no rotation
+        elif step / grid[best] > _SEARCH_STEP:
+            low, high = grid[best - 1], grid[best + 1]
         else:
-            break
-    omega = float(_parabola_minimum(grid, total[None, :])[0])
-    return (grid, curves, omega) if math.isfinite(omega) else None
+            return float(grid[best])
+    return math.nan
+
+
+def _polish(total: Callable[[np.ndarray], float], omega: float) -> float:
+    """The minimum of ``total`` near ``omega``, by parabolas through ever closer neighbours."""
+    for relative in _POLISH_STEPS:
+        step = omega * relative
+        left, middle, right = (total(np.array([omega + d * step])) for d in (-1.0, 0.0, 1.0))
+        curvature = left - 2.0 * middle + right
+        if curvature > 0:
+            omega += float(np.clip(0.5 * (left - right) / curvature, -2.0, 2.0)) * step
+    return omega
 
 
 def _single(grid: np.ndarray, total: np.ndarray, omega: float, samples: float) -> Combined:

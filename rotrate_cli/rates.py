@@ -73,11 +73,12 @@ def focal_px_from_fov(fov_deg: float, width_px: int) -> float:
     return (width_px / 2.0) / math.tan(math.radians(fov_deg) / 2.0)
 
 
-def two_column_fit(first: np.ndarray, second: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per row, the least-squares ``a, b`` of ``y ~ a first + b second`` (rows of padded tracks,
-    padding zeroed in all three); ``0, 0`` where the two columns are degenerate."""
-    a11, a22, a12 = (first * first).sum(1), (second * second).sum(1), (first * second).sum(1)
-    b1, b2 = (first * y).sum(1), (second * y).sum(1)
+def solve_two_columns(
+    a11: np.ndarray, a22: np.ndarray, a12: np.ndarray, b1: np.ndarray, b2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per track, the least-squares ``a, b`` of ``y ~ a first + b second`` from its normal
+    equations (``a11 = first.first``, ``a22 = second.second``, ``a12 = first.second``,
+    ``b1 = first.y``, ``b2 = second.y``); ``0, 0`` where the two columns are degenerate."""
     det = a11 * a22 - a12 * a12
     det = np.where(np.abs(det) > 1e-300, det, np.inf)
     return (a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det
@@ -204,16 +205,21 @@ def fit_samples(samples: pd.DataFrame, omega_rad_s: dict[int, float]) -> pd.Data
 _BATCH_ELEMENTS = 20_000
 
 
-Model = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+#: A batched model: ``(params, rows) -> (predicted, jacobian)`` for the given rows of the batch
+#: (``params`` holds just those rows; ``rows`` is an index array or ``slice(None)`` for all).
+Model = Callable[[np.ndarray, "np.ndarray | slice"], tuple[np.ndarray, np.ndarray]]
+
+_ALL = slice(None)
 
 
 def _orthographic(t: np.ndarray, weight: np.ndarray) -> Model:
     """``y = A cos(wt) + B sin(wt)``; params rows ``(A, B, w)``. Returns model and Jacobian."""
 
-    def model(params: np.ndarray, _: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def model(params: np.ndarray, rows: np.ndarray | slice) -> tuple[np.ndarray, np.ndarray]:
         a, b, w = params[:, 0:1], params[:, 1:2], params[:, 2:3]
-        c, s_ = np.cos(w * t) * weight, np.sin(w * t) * weight
-        return a * c + b * s_, np.stack([c, s_, t * (-a * s_ + b * c)], axis=2)
+        tr, weight_r = t[rows], weight[rows]
+        c, s_ = np.cos(w * tr) * weight_r, np.sin(w * tr) * weight_r
+        return a * c + b * s_, np.stack([c, s_, tr * (-a * s_ + b * c)], axis=2)
 
     return model
 
@@ -227,9 +233,10 @@ def _pinhole(t: np.ndarray, weight: np.ndarray, axis_n: float) -> Model:
     The sign of ``w`` is observable here (near points move faster), unlike orthographically.
     """
 
-    def model(params: np.ndarray, _: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def model(params: np.ndarray, rows: np.ndarray | slice) -> tuple[np.ndarray, np.ndarray]:
         a, b, w = params[:, 0:1], params[:, 1:2], params[:, 2:3]
-        c, s_ = np.cos(w * t), np.sin(w * t)
+        tr = t[rows]
+        c, s_ = np.cos(w * tr), np.sin(w * tr)
         lateral = a * c + b * s_
         depth = -a * s_ + b * c
         numerator = axis_n + lateral
@@ -239,29 +246,34 @@ def _pinhole(t: np.ndarray, weight: np.ndarray, axis_n: float) -> Model:
         jacobian = np.stack([
             (c * denominator - numerator * s_) / square,
             (s_ * denominator + numerator * c) / square,
-            t * (depth * denominator - numerator * lateral) / square,
-        ], axis=2) * weight[:, :, None]
-        return numerator / denominator * weight, jacobian
+            tr * (depth * denominator - numerator * lateral) / square,
+        ], axis=2) * weight[rows][:, :, None]
+        return numerator / denominator * weight[rows], jacobian
 
     return model
 
 
 def _gauss_newton(params: np.ndarray, model: Model, y: np.ndarray, iterations: int) -> np.ndarray:
-    """Batched Gauss-Newton on rows of ``params``; returns the refined parameters."""
+    """Batched Gauss-Newton on rows of ``params``; returns the refined parameters. A row stops
+    once its rate's step is below 1e-9 relative (most converge in a handful of steps, a few
+    slowly: only those keep being computed)."""
     params = params.copy()
     eye = np.eye(params.shape[1])
+    active = np.arange(len(params))
     for _ in range(iterations):
-        predicted, jacobian = model(params, y)
-        residual = y - predicted
+        if len(active) == 0:
+            break
+        predicted, jacobian = model(params[active], active)
+        residual = y[active] - predicted
         jacobian_t = jacobian.transpose(0, 2, 1)
         jtj = jacobian_t @ jacobian
         jtr = (jacobian_t @ residual[:, :, None])[:, :, 0]
         jtj += 1e-12 * eye * np.trace(jtj, axis1=1, axis2=2)[:, None, None] + 1e-300 * eye
         step = np.linalg.solve(jtj, jtr[:, :, None])[:, :, 0]
         step[~np.isfinite(step).all(axis=1)] = 0.0
-        params += step
-        if np.all(np.abs(step[:, 2]) <= 1e-9 * np.maximum(1.0, np.abs(params[:, 2]))):
-            break
+        params[active] += step
+        converged = np.abs(step[:, 2]) <= 1e-9 * np.maximum(1.0, np.abs(params[active, 2]))
+        active = active[~converged]
     return params
 
 
@@ -325,14 +337,14 @@ def _fit_batch(
         if sense == 0:
             starts = [params / [scale, scale, 1.0], params * [1.0 / scale, -1.0 / scale, -1.0]]
             fitted = [_gauss_newton(start, model, target, iterations) for start in starts]
-            costs = [((target - model(fit, target)[0]) ** 2).sum(1) for fit in fitted]
+            costs = [((target - model(fit, _ALL)[0]) ** 2).sum(1) for fit in fitted]
             params = np.where((costs[0] <= costs[1])[:, None], fitted[0], fitted[1])
         else:  # a sense decided for the whole body (see fit_tracks)
             flip = 1.0 if sense > 0 else -1.0
             start = params * [1.0 / scale, 1.0 / scale, 1.0]
             start[:, 1:] *= np.where(start[:, 2:3] * flip < 0, -1.0, 1.0)
             params = _gauss_newton(start, model, target, iterations)
-    predicted, jacobian = model(params, target)
+    predicted, jacobian = model(params, _ALL)
     residual = target - predicted
     jtj = jacobian.transpose(0, 2, 1) @ jacobian
     rss = (residual**2).sum(1)
@@ -410,17 +422,6 @@ def _pad(times: np.ndarray, offsets: np.ndarray, parts: list[slice]) -> tuple[np
         offset[row, :size] = offsets[part]
         mask[row, :size] = True
     return time_s, offset, mask
-
-
-def padded_tracks(samples: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The tracks of ``samples`` (sorted by track then time; columns ``track, time_s,
-    offset_px``) as padded rows: ``time_s, offset_px, mask`` (tracks x longest track) and the
-    track ids."""
-    tracks = samples["track"].to_numpy()
-    parts = _track_slices(tracks)
-    times, offsets = samples["time_s"].to_numpy(dtype=float), samples["offset_px"].to_numpy(dtype=float)
-    time_s, offset, mask = _pad(times, offsets, parts)
-    return time_s, offset, mask, np.array([tracks[part.start] for part in parts], dtype=int)
 
 
 def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None, sense: int) -> dict[int, TrackFit]:

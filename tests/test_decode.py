@@ -87,3 +87,23 @@ def test_truncated_video_decodes_what_is_there(tmp_path: Path) -> None:
     source = FrameSource(cut)
     decoded = sum(1 for _ in source.frames())
     assert 5 < decoded < 30
+
+
+def test_grey_frames_match_the_colour_conversion_and_keep_the_times() -> None:
+    # the decoder's own luma (used for speed) must give the grey that COLOR_BGR2GRAY gives
+    source = FrameSource(SAMPLES / "cylinder_ortho.mp4")
+    colour = list(source.frames(end_s=1.0))
+    grey = list(source.frames(end_s=1.0, grey=True))
+    assert source._luma_table() is not None  # the fast path is taken on our own H.264 clips
+    assert [f.time_s for f in grey] == [f.time_s for f in colour]
+    for c, g in zip(colour, grey, strict=True):
+        expected = cv2.cvtColor(c.image, cv2.COLOR_BGR2GRAY).astype(int)
+        assert g.image.shape == expected.shape and g.image.dtype == np.uint8
+        difference = np.abs(g.image.astype(int) - expected)
+        assert difference.mean() < 0.8 and np.percentile(difference, 99.9) <= 3
+
+
+def test_grey_frames_of_an_image_sequence(tmp_path: Path) -> None:
+    _write_images(tmp_path, ["a1.png", "a2.png"])
+    frames = list(FrameSource(tmp_path, fps=1).frames(grey=True, transform=lambda image: image[:2, :2]))
+    assert [f.image.tolist() for f in frames] == [[[0, 0], [0, 0]], [[10, 10], [10, 10]]]

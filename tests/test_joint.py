@@ -76,3 +76,21 @@ def test_one_track_gets_an_interval_from_its_own_misfit(rng: np.random.Generator
 def test_no_tracks_or_no_guess_gives_nan() -> None:
     empty = pd.DataFrame({"track": [], "frame": [], "time_s": [], "offset_px": []})
     assert np.isnan(joint_fit(empty, {}, 0.5).omega_rad_s)
+
+
+def test_ragged_tracks_sum_and_split_like_a_group_by(rng: np.random.Generator) -> None:
+    from rotrate_cli.ragged import Ragged
+
+    samples = _short_noisy_tracks(rng, 0.5, tracks=30, samples=7, step_s=0.1, noise_px=1.0)
+    samples = samples[samples.index % 5 != 0]  # uneven lengths
+    tracks = Ragged.from_samples(samples, np.arange(3, 30))
+    expected = samples[samples["track"] >= 3].groupby("track")["offset_px"].sum()
+    assert tracks.ids.tolist() == expected.index.tolist()
+    assert np.allclose(tracks.sums(tracks.offset), expected.to_numpy())
+    assert np.allclose(tracks.time_s, samples.loc[samples["track"] >= 3, "time_s"].to_numpy())
+    seen = []
+    for part, block in tracks.blocks(10):
+        assert block.counts.sum() <= max(10, block.counts[0])
+        assert np.allclose(block.sums(block.offset), expected.to_numpy()[part])
+        seen.extend(block.ids.tolist())
+    assert seen == tracks.ids.tolist()
