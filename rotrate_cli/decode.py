@@ -292,7 +292,8 @@ class FrameSource:
                 ok, luma = capture.read() if capture.isOpened() else (False, None)
         finally:
             capture.release()
-        if ok and luma is not None and luma.dtype == np.uint8 and luma.shape == (self.info.height_px, self.info.width_px):
+        size = (self.info.height_px, self.info.width_px)
+        if ok and luma is not None and luma.dtype == np.uint8 and luma.shape == size:
             x = luma[::4, ::4].astype(float).ravel()
             y = self._first_grey.astype(float).ravel()
             if x.std() > 4.0:
@@ -314,7 +315,9 @@ class FrameSource:
         return stamp_ms / 1000.0
 
 
-def _compose(first: Callable[[np.ndarray], np.ndarray], then: Callable[[np.ndarray], Any]) -> Callable[[np.ndarray], Any]:
+def _compose(
+    first: Callable[[np.ndarray], np.ndarray], then: Callable[[np.ndarray], Any]
+) -> Callable[[np.ndarray], Any]:
     return lambda image: then(first(image))
 
 

@@ -32,8 +32,8 @@ import pandas as pd
 from scipy.special import stdtrit
 
 from rotrate_cli.outliers import Combined
-from rotrate_cli.rates import Camera, solve_two_columns
 from rotrate_cli.ragged import Ragged
+from rotrate_cli.rates import Camera, solve_two_columns
 
 #: Grid points of the search for the minimum, and the relative grid step at which it stops.
 _SEARCH_POINTS = 13
@@ -69,14 +69,19 @@ def _block_misfits(block: Ragged, cos_t: np.ndarray, sin_t: np.ndarray, camera: 
         target = block.offset / camera.focal_px
         x = target + camera.axis_n
         first, second = c - x * s_, s_ + x * c
-    weight2: np.ndarray | float = 1.0
-    for iteration in range(1 if camera is None else 2):
-        if iteration:
-            depth = -block.spread(a) * s_ + block.spread(b) * c
-            weight2 = 1.0 / np.maximum(np.abs(1.0 - depth), 1e-3) ** 2
+
+    def solve(weight2: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         wf, ws = first * weight2, second * weight2
         b1, b2 = sums(wf * target), sums(ws * target)
         a, b = solve_two_columns(sums(wf * first), sums(ws * second), sums(wf * second), b1, b2)
+        return a, b, b1, b2
+
+    weight2: np.ndarray | float = 1.0
+    a, b, b1, b2 = solve(weight2)
+    if camera is not None:
+        depth = -block.spread(a) * s_ + block.spread(b) * c
+        weight2 = 1.0 / np.maximum(np.abs(1.0 - depth), 1e-3) ** 2
+        a, b, b1, b2 = solve(weight2)
     misfit = np.maximum(sums(target * target * weight2) - a * b1 - b * b2, 0.0)
     return misfit if camera is None else misfit * camera.focal_px**2
 
