@@ -30,6 +30,7 @@ from rotrate_cli.outliers import (
     judge_fits,
     judge_paper,
 )
+from rotrate_cli.segment import Body, segment_tracks
 from rotrate_cli.series import rate_series
 from rotrate_cli.tracking import (
     VIDEO_BLUR_SIGMA_PX,
@@ -74,6 +75,8 @@ class AnalysisConfig:
         tracker: tracking settings.
         rejection: outlier-rejection thresholds.
         window_s: also measure omega(t) over a sliding window this long (None: not).
+        segment: group the tracks into rigid bodies by rate and axis and measure each (the
+            axis of each is found; ``fixation_px`` must be None).
     """
 
     fixation_px: tuple[float, float] | None
@@ -88,6 +91,7 @@ class AnalysisConfig:
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
     rejection: RejectionConfig = field(default_factory=RejectionConfig)
     window_s: float | None = None
+    segment: bool = False
 
 
 @dataclass(frozen=True)
@@ -113,6 +117,8 @@ class Analysis:
         axis_found: True when the fixation point was found from the tracks.
         axis_angle_found: True when the angle was found from the motion.
         series: omega(t) over a sliding window (see :mod:`rotrate_cli.series`), or None.
+        bodies: with ``segment``, every rigid body measured, the headline one (most tracks)
+            first; None otherwise.
 
     ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
     a long clip's table is large, and most reports do not need it.
@@ -139,6 +145,7 @@ class Analysis:
     axis_found: bool = False
     axis_angle_found: bool = False
     series: pd.DataFrame | None = None
+    bodies: tuple[Body, ...] | None = None
 
     @property
     def rpm(self) -> float:
@@ -195,6 +202,10 @@ def _check_config(config: AnalysisConfig) -> None:
     if config.axis_angle_deg is not None and not (math.isfinite(config.axis_angle_deg)
                                                    and -180 <= config.axis_angle_deg <= 180):
         raise InputError("--axis-angle takes degrees between -180 and 180 (0: a vertical axis)")
+    if config.segment and config.fixation_px is not None:
+        raise InputError("--segment finds each body's axis itself; drop --fixation (or use --fixation auto)")
+    if config.segment and config.window_s is not None:
+        raise InputError("--window follows one body; it cannot be combined with --segment")
     if config.method == "paper" and (config.fov_deg is not None or config.focal_px is not None):
         raise InputError("--method paper is orthographic, as in the paper; drop --fov/--focal-px or use --method fit")
 
@@ -374,6 +385,35 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
 
     duration_s = run.last_time_s - run.first_time_s
     del run
+    size_px = (info.width_px, info.height_px)
+    context = {"source": str(source), "fps": info.fps, "frames": count, "duration_s": duration_s,
+               "rejection": config.rejection, "axis_angle_deg": float(angle),
+               "axis_found": config.fixation_px is None, "axis_angle_found": config.axis_angle_deg is None}
+    if config.segment:
+        return _segmented(everything, angle, config, size_px, warnings, context)
+    fixation, result, camera = _measure_body(everything, angle, config, size_px)
+    del everything
+    series = None
+    if config.window_s is not None:
+        series = rate_series(result.offsets, config.window_s,
+                             lambda part: rates_from_offsets(part, config.method, config.rejection, camera).combined)
+    return _result(result, fixation_px=(float(fixation[0]), float(fixation[1])), method=_method_name(config, camera),
+                   warnings=tuple(warnings), series=series, **context)
+
+
+def _method_name(config: AnalysisConfig, camera: rates.Camera | None) -> str:
+    return config.method if camera is None else f"{config.method}+pinhole(f={camera.focal_px:.1f}px)"
+
+
+def _measure_body(
+    everything: pd.DataFrame, angle: float, config: AnalysisConfig, size_px: tuple[int, int]
+) -> tuple[tuple[float, float], RateResult, rates.Camera | None]:
+    """The fixation point (given, or found from the tracks), rates and camera of one body's
+    tracks (``frame, time_s, track, x_px, y_px`` sorted by track then frame).
+
+    Raises:
+        NoResultError: the axis cannot be found from the tracks.
+    """
     if config.fixation_px is None:
         found = axes.axis_offset_from_recurrence(everything, axes.offsets_along(everything, (0.0, 0.0), angle))
         if not math.isfinite(found):
@@ -383,7 +423,6 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     else:
         fixation = (float(config.fixation_px[0]), float(config.fixation_px[1]))
     tracks = thin(everything, config.every)
-    del everything
     base = pd.DataFrame({
         "track": tracks["track"].to_numpy() + 1,  # features are numbered from 1, as in the paper
         "frame": tracks["frame"].to_numpy(),
@@ -398,22 +437,48 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         moved = positions is not None and point != fixation
         offset = axes.offsets_along(positions, point, angle) if moved else first_offsets
         offsets = base.assign(offset_px=offset)
-        camera = _camera(config, (info.width_px, info.height_px), point, angle)
+        camera = _camera(config, size_px, point, angle)
         return rates_from_offsets(offsets, config.method, config.rejection, camera), camera
 
     result, camera = measure(fixation)
     if config.fixation_px is None and config.method == "fit" and camera is None:
         fixation, result = _refine_fixation(result, fixation, angle, measure)
-    series = None
-    if config.window_s is not None:
-        series = rate_series(result.offsets, config.window_s,
-                             lambda part: rates_from_offsets(part, config.method, config.rejection, camera).combined)
-    return _result(result, source=str(source), fps=info.fps, frames=count, duration_s=duration_s,
-                   fixation_px=(float(fixation[0]), float(fixation[1])),
-                   method=config.method if camera is None else f"{config.method}+pinhole(f={camera.focal_px:.1f}px)",
-                   rejection=config.rejection, warnings=tuple(warnings), axis_angle_deg=float(angle),
-                   axis_found=config.fixation_px is None, axis_angle_found=config.axis_angle_deg is None,
-                   series=series)
+    return fixation, result, camera
+
+
+def _segmented(
+    everything: pd.DataFrame, angle: float, config: AnalysisConfig, size_px: tuple[int, int],
+    warnings: list[str], context: dict[str, object],
+) -> Analysis:
+    """Group the tracks into rigid bodies (:mod:`rotrate_cli.segment`) and measure each; the
+    largest measured body is the analysis's headline result, all are in ``bodies``."""
+    ux, uy = axes.unit_offset(angle)
+    extent_px = abs(size_px[0] * ux) + abs(size_px[1] * uy)
+    groups = segment_tracks(everything, axes.offsets_along(everything, (0.0, 0.0), angle), extent_px)
+    track = everything["track"].to_numpy()
+    measured = []
+    for ids in groups:
+        part = everything[np.isin(track, ids)].reset_index(drop=True)
+        try:
+            fixation, result, camera = _measure_body(part, angle, config, size_px)
+        except NoResultError:
+            continue
+        if result.combined.tracks_used > 0:
+            measured.append((fixation, result, camera, len(ids)))
+    if not measured:
+        raise NoResultError(f"no rigid body could be measured ({len(groups)} group(s) of tracks found); "
+                            "try a longer clip or --roi around one object")
+    skipped = len(groups) - len(measured)
+    if skipped:
+        warnings.append(f"{skipped} group(s) of tracks gave no trustworthy rate and are not reported")
+    bodies = tuple(
+        Body(r.combined.omega_rad_s, r.combined.omega_low_rad_s, r.combined.omega_high_rad_s,
+             (float(f[0]), float(f[1])), r.direction, r.combined.tracks_used, total)
+        for f, r, _, total in measured
+    )
+    fixation, result, camera, _ = measured[0]
+    return _result(result, fixation_px=(float(fixation[0]), float(fixation[1])), method=_method_name(config, camera),
+                   warnings=tuple(warnings), series=None, bodies=bodies, **context)
 
 
 def _by_track(tracks: pd.DataFrame) -> pd.DataFrame:

@@ -123,8 +123,9 @@ def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | N
 @app.command("analyze")
 def analyze_command(
     video: Annotated[str, typer.Argument(help="Video file, image folder, or printf pattern like frames/img.%03d.png.")],
-    fixation: Annotated[str, typer.Option("--fixation", help="X,Y pixel of a point on the rotation axis, or "
-                                                             "'auto' to find the axis from the motion.")],
+    fixation: Annotated[str | None, typer.Option("--fixation", help="X,Y pixel of a point on the rotation axis, or "
+                                                                    "'auto' to find the axis from the motion "
+                                                                    "(required, except with --segment).")] = None,
     fps: Annotated[
         float | None, typer.Option("--fps", help="Frame rate; overrides the file's, required for images.")
     ] = None,
@@ -144,6 +145,8 @@ def analyze_command(
                                                                   "window of this many seconds.")] = None,
     series_csv_path: Annotated[Path | None, typer.Option("--series-csv", help="Write omega(t) (needs --window) "
                                                                                "to this CSV file.")] = None,
+    segment: Annotated[bool, typer.Option("--segment", help="Several objects: group the points into rigid "
+                                                            "bodies by rate and axis and report each.")] = False,
     blur: Annotated[float | None, typer.Option("--blur", help="Blur (sigma, px) before tracking; default 1 "
                                                               "for videos, 0 for image sequences.")] = None,
     fmt: FormatOption = "table",
@@ -157,7 +160,10 @@ def analyze_command(
     def job() -> int:
         _check_format(fmt)
         _check_method(method)
-        point = None if fixation.strip().lower() == "auto" else _numbers(fixation, 2, "--fixation", "640,360 (or auto)")
+        if fixation is None and not segment:
+            raise InputError("give --fixation X,Y (a pixel on the rotation axis) or --fixation auto")
+        auto = fixation is None or fixation.strip().lower() == "auto"
+        point = None if auto else _numbers(fixation or "", 2, "--fixation", "640,360 (or auto)")
         if blur is not None and not (math.isfinite(blur) and 0 <= blur <= 20):
             raise InputError("--blur takes a sigma in pixels between 0 and 20")
         tracker = TrackerConfig(blur_sigma_px=blur)
@@ -172,7 +178,7 @@ def analyze_command(
             check_output_path(series_csv_path, force)
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
                                 axis_angle_deg=axis_angle, window_s=window, start_s=start, end_s=end, every=every,
-                                method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker)
+                                method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker, segment=segment)
         with _progress_bar(quiet) as progress:
             analysis = analyze(video, config, progress)
         _emit(analysis, fmt, output, force)

@@ -86,6 +86,18 @@ def _block_misfits(block: Ragged, cos_t: np.ndarray, sin_t: np.ndarray, camera: 
     return misfit if camera is None else misfit * camera.focal_px**2
 
 
+def track_misfits(samples: pd.DataFrame, omega_rad_s: float, camera: Camera | None = None) -> np.ndarray:
+    """Each track's least squared misfit at ``omega_rad_s`` (offsets' units squared), in the
+    order of track ids; ``samples`` as for :func:`joint_fit`."""
+    tracks = Ragged.from_samples(samples)
+    angle = omega_rad_s * tracks.times_s
+    cos_t, sin_t = np.cos(angle), np.sin(angle)
+    out = np.empty(len(tracks))
+    for part, block in tracks.blocks(_BLOCK_SAMPLES):
+        out[part] = _block_misfits(block, cos_t, sin_t, camera)
+    return out
+
+
 def _parabola_minimum(grid: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Per row of ``values`` (rows x grid), the grid minimum refined by a parabola through it
     and its neighbours; NaN where the minimum lies on the grid's edge."""

@@ -95,6 +95,13 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
         "rejected": dict(sorted(reasons.items())),
         "warnings": list(analysis.warnings),
         "features": features,
+        **({} if analysis.bodies is None else {"bodies": [
+            {"omega": _number(body.omega_rad_s), "omega_low": _number(body.omega_low_rad_s),
+             "omega_high": _number(body.omega_high_rad_s), "rpm": _number(body.omega_rad_s * 30.0 / math.pi, 4),
+             "axis_px": [_number(v, 3) for v in body.axis_px], "direction": body.direction,
+             "tracks": body.tracks_used, "tracks_total": body.tracks_total}
+            for body in analysis.bodies
+        ]}),
         **({} if analysis.series is None else {"series": [
             {"time_s": _number(row.time_s, 6), "omega": _number(row.omega_rad_s),
              "omega_low": _number(row.omega_low_rad_s), "omega_high": _number(row.omega_high_rad_s),
@@ -145,6 +152,18 @@ def render_table(analysis: Analysis, console: Console) -> None:
     for warning in analysis.warnings:
         summary.add_row("warning", warning)
     console.print(summary)
+    if analysis.bodies is not None:
+        bodies = Table(title="bodies (the first is the summary above)", title_justify="left")
+        for name in ("body", "omega rad/s", "95% interval", "rpm", "axis px", "direction", "tracks used"):
+            bodies.add_column(name, justify="left" if name in ("axis px", "direction") else "right")
+        for number, body in enumerate(analysis.bodies, start=1):
+            low, high = body.omega_low_rad_s, body.omega_high_rad_s
+            bodies.add_row(str(number), f"{body.omega_rad_s:.4f}",
+                           f"[{low:.4f}, {high:.4f}]" if math.isfinite(low) else "n/a",
+                           f"{body.omega_rad_s * 30.0 / math.pi:.3f}",
+                           f"{body.axis_px[0]:.1f}, {body.axis_px[1]:.1f}", body.direction,
+                           f"{body.tracks_used} of {body.tracks_total}")
+        console.print(bodies)
 
     features = analysis.features.copy()
     features["weight"] = 1.0 / features["omega_se_rad_s"].where(features["omega_se_rad_s"] > 0) ** 2
