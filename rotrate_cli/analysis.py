@@ -21,6 +21,7 @@ from rotrate_cli import rates
 from rotrate_cli.decode import FrameSource, prefetch
 from rotrate_cli.errors import InputError, NoResultError
 from rotrate_cli.joint import joint_fit
+from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import (
     Combined,
     RejectionConfig,
@@ -284,6 +285,7 @@ def rates_from_offsets(
         combined = combine_plain(features.loc[features["inlier"], "omega_rad_s"].to_numpy())
     else:
         features = judge_fits(offsets, rates.fit_tracks(offsets, rejection.min_samples, camera), rejection)
+        release_free_memory()  # the per-track fits' padded batches are gone
         used = features[features["inlier"]]
         combined = combine(used["omega_rad_s"].to_numpy(), used["omega_se_rad_s"].to_numpy())
         combined = _joint(offsets, used, combined, rejection, camera)
@@ -367,6 +369,7 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     if run.tracks.empty:
         raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
     everything = _by_track(run.tracks)
+    release_free_memory()  # the tracker's store and the frames' buffers are gone
     angle = config.axis_angle_deg
     if angle is None:
         angle = axes.motion_angle_deg(everything)
@@ -391,8 +394,11 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
                "axis_found": config.fixation_px is None, "axis_angle_found": config.axis_angle_deg is None}
     if config.segment:
         return _segmented(everything, angle, config, size_px, warnings, context)
-    fixation, result, camera = _measure_body(everything, angle, config, size_px)
-    del everything
+    body = _prepare_body(everything, angle, config)
+    del everything  # the offsets hold what is needed: a long clip's positions need not stay
+    release_free_memory()
+    fixation, result, camera = _measure_body(body, angle, config, size_px)
+    del body
     series = None
     if config.window_s is not None:
         series = rate_series(result.offsets, config.window_s,
@@ -405,11 +411,27 @@ def _method_name(config: AnalysisConfig, camera: rates.Camera | None) -> str:
     return config.method if camera is None else f"{config.method}+pinhole(f={camera.focal_px:.1f}px)"
 
 
-def _measure_body(
-    everything: pd.DataFrame, angle: float, config: AnalysisConfig, size_px: tuple[int, int]
-) -> tuple[tuple[float, float], RateResult, rates.Camera | None]:
-    """The fixation point (given, or found from the tracks), rates and camera of one body's
-    tracks (``frame, time_s, track, x_px, y_px`` sorted by track then frame).
+@dataclass(frozen=True)
+class _Body:
+    """One body's tracks reduced to what the rate stages need (see :func:`_prepare_body`).
+
+    Attributes:
+        fixation_px: the fixation point (given, or found from the tracks).
+        base: ``track, frame, time_s`` per sample (tracks numbered from 1).
+        offsets_px: each sample's offset from ``fixation_px``.
+        positions: ``x_px, y_px`` per sample while the fixation may still be refined, else None.
+    """
+
+    fixation_px: tuple[float, float]
+    base: pd.DataFrame
+    offsets_px: np.ndarray
+    positions: pd.DataFrame | None
+
+
+def _prepare_body(everything: pd.DataFrame, angle: float, config: AnalysisConfig) -> _Body:
+    """The fixation point (given, or found from the tracks) and the offsets from it of one
+    body's tracks (``frame, time_s, track, x_px, y_px`` sorted by track then frame). The caller
+    can drop the tracks table afterwards: nothing here refers to it.
 
     Raises:
         NoResultError: the axis cannot be found from the tracks.
@@ -430,17 +452,24 @@ def _measure_body(
     }, copy=False)
     # positions are kept only while the fixation may still move: keep the peak low
     positions = tracks[["x_px", "y_px"]] if config.fixation_px is None else None
-    first_offsets = axes.offsets_along(tracks, fixation, angle)
-    del tracks
+    return _Body(fixation, base, axes.offsets_along(tracks, fixation, angle), positions)
+
+
+def _measure_body(
+    body: _Body, angle: float, config: AnalysisConfig, size_px: tuple[int, int]
+) -> tuple[tuple[float, float], RateResult, rates.Camera | None]:
+    """The rates of one prepared body, with its fixation refined when it was found."""
+    fixation = body.fixation_px
 
     def measure(point: tuple[float, float]) -> tuple[RateResult, rates.Camera | None]:
-        moved = positions is not None and point != fixation
-        offset = axes.offsets_along(positions, point, angle) if moved else first_offsets
-        offsets = base.assign(offset_px=offset)
+        moved = body.positions is not None and point != fixation
+        offset = axes.offsets_along(body.positions, point, angle) if moved else body.offsets_px
+        offsets = body.base.assign(offset_px=offset)
         camera = _camera(config, size_px, point, angle)
         return rates_from_offsets(offsets, config.method, config.rejection, camera), camera
 
     result, camera = measure(fixation)
+    release_free_memory()
     if config.fixation_px is None and config.method == "fit" and camera is None:
         fixation, result = _refine_fixation(result, fixation, angle, measure)
     return fixation, result, camera
@@ -460,7 +489,7 @@ def _segmented(
     for ids in groups:
         part = everything[np.isin(track, ids)].reset_index(drop=True)
         try:
-            fixation, result, camera = _measure_body(part, angle, config, size_px)
+            fixation, result, camera = _measure_body(_prepare_body(part, angle, config), angle, config, size_px)
         except NoResultError:
             continue
         if result.combined.tracks_used > 0:
@@ -482,6 +511,11 @@ def _segmented(
 
 
 def _by_track(tracks: pd.DataFrame) -> pd.DataFrame:
+    """``tracks`` sorted by track then frame (the tracker hands them over so: then as they are)."""
+    track, frame = tracks["track"].to_numpy(), tracks["frame"].to_numpy()
+    step = np.diff(track)
+    if ((step > 0) | ((step == 0) & (np.diff(frame) > 0))).all():
+        return tracks
     return tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True)
 
 

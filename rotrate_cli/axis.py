@@ -58,8 +58,16 @@ def unit_offset(angle_deg: float) -> tuple[float, float]:
 def offsets_along(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg: float) -> np.ndarray:
     """Each sample's signed distance from the axis, perpendicular to it, in pixels."""
     ux, uy = unit_offset(angle_deg)
-    return (tracks["x_px"].to_numpy(dtype=np.float64) - fixation_px[0]) * ux \
-        + (tracks["y_px"].to_numpy(dtype=np.float64) - fixation_px[1]) * uy
+    # in place: a long clip's positions are large, and this runs on all of them
+    offset = tracks["x_px"].to_numpy(dtype=np.float64, copy=True)
+    offset -= fixation_px[0]
+    offset *= ux
+    if uy != 0.0:
+        across = tracks["y_px"].to_numpy(dtype=np.float64, copy=True)
+        across -= fixation_px[1]
+        across *= uy
+        offset += across
+    return offset
 
 
 def motion_angle_deg(tracks: pd.DataFrame) -> float:

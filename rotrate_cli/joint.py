@@ -183,10 +183,13 @@ def joint_fit(
         return Combined(omega, math.nan, math.nan, k)
     half = _jackknife_half_width(finite)
     if k >= GROUPS * _MIN_PER_GROUP:
-        time_s = tracks.time_s
-        duration_s = np.maximum.reduceat(time_s, tracks.starts) - np.minimum.reduceat(time_s, tracks.starts)
+        duration_s = np.empty(k)
+        distance = np.empty(k)
+        for part, block in tracks.blocks(_BLOCK_SAMPLES):
+            time_s = block.time_s
+            duration_s[part] = np.maximum.reduceat(time_s, block.starts) - np.minimum.reduceat(time_s, block.starts)
+            distance[part] = block.sums(np.abs(block.offset)) / block.counts
         arc = np.abs(omega) * duration_s
-        distance = tracks.sums(np.abs(tracks.offset)) / tracks.counts
         groups = [np.array_split(np.argsort(key, kind="stable"), GROUPS) for key in (arc, distance)]
         for wider in (False, True):
             if wider:

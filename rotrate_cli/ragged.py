@@ -27,7 +27,8 @@ class Ragged:
         counts: each track's number of samples (k,), all at least 1.
         offset: the samples' offsets (N,), in the source's units.
         time_index: each sample's index into ``times`` (N,).
-        times_s: the distinct sample times, seconds.
+        times_s: the distinct sample times, seconds (per frame when the samples have a
+            ``frame`` column; frames without samples hold NaN).
     """
 
     ids: np.ndarray
@@ -39,8 +40,8 @@ class Ragged:
 
     @classmethod
     def from_samples(cls, samples: pd.DataFrame, tracks: np.ndarray | None = None) -> Ragged:
-        """From ``samples`` (columns ``track, time_s, offset_px``, sorted by track then time),
-        keeping only the ``tracks`` listed (all when None)."""
+        """From ``samples`` (columns ``track, time_s, offset_px`` and optionally ``frame``,
+        sorted by track then time), keeping only the ``tracks`` listed (all when None)."""
         track = samples["track"].to_numpy()
         keep = slice(None) if tracks is None else np.isin(track, tracks)
         track = track[keep]
@@ -51,10 +52,22 @@ class Ragged:
         counts = np.diff(np.r_[starts, len(track)])
         ids = track[starts]
         del track
+        time_s = samples["time_s"].to_numpy(dtype=float)
+        frame = samples["frame"].to_numpy() if "frame" in samples.columns else None
+        if frame is not None and len(frame) and int(frame.max()) - int(frame.min()) < 4 * len(frame) + 1000:
+            # one time per frame: the frame number is the index into the frames' times
+            first = int(frame.min())
+            times_s = np.full(int(frame.max()) - first + 1, np.nan)
+            times_s[frame - first] = time_s
+            time_index = frame[keep].astype(np.int32)
+            time_index -= first
+            if _consistent(times_s, time_index, time_s[keep] if tracks is not None else time_s):
+                return cls(ids, starts, counts, samples["offset_px"].to_numpy(dtype=float)[keep], time_index,
+                           times_s)
         # hashing, not sorting: a long clip's samples are factorised without sorted copies
-        codes, times_s = pd.factorize(samples["time_s"].to_numpy(dtype=float)[keep], sort=True)
+        codes, unique_s = pd.factorize(time_s[keep], sort=True)
         offset = samples["offset_px"].to_numpy(dtype=float)[keep]
-        return cls(ids, starts, counts, offset, codes.astype(np.int32), np.asarray(times_s, dtype=float))
+        return cls(ids, starts, counts, offset, codes.astype(np.int32), np.asarray(unique_s, dtype=float))
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -89,3 +102,10 @@ class Ragged:
                 self.offset[base:stop], self.time_index[base:stop], self.times_s,
             )
             first = last
+
+
+def _consistent(times_s: np.ndarray, time_index: np.ndarray, time_s: np.ndarray, block: int = 1 << 16) -> bool:
+    """True when every sample's time is its frame's time (checked in blocks: no full-size
+    temporaries)."""
+    return all(np.array_equal(times_s[time_index[i:i + block]], time_s[i:i + block])
+               for i in range(0, len(time_index), block))

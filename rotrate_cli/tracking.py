@@ -108,58 +108,97 @@ def tracking_image(image: np.ndarray, scale: float, blur_sigma_px: float = 0.0) 
     return grey
 
 
+#: Samples per block of the tracker's store (see :class:`_Tracks`).
+_BLOCK_SAMPLES = 1 << 15
+
+
 class _Tracks:
-    """Append-only store of tracked positions, compact: per frame one id array and one float32
-    position array (16 bytes a point), plus the frame's index and time once."""
+    """Append-only store of tracked positions, compact (16 bytes a sample: id, frame slot, and
+    float32 x, y) and in large blocks rather than one small array per frame: a finished block
+    is freed as soon as it has been copied into the table, and large blocks go back to the
+    operating system when freed, where many small arrays would stay in the process's heap. So
+    at the end of a long clip the store and the table it becomes are not both resident."""
 
     def __init__(self) -> None:
         self.frame_index: list[int] = []
         self.frame_time_s: list[float] = []
-        self.ids: list[np.ndarray] = []
-        self.points: list[np.ndarray] = []
+        self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # ids, frame slots, points
+        self._fill = _BLOCK_SAMPLES  # samples used in the last block (full: start a new one)
 
     def add(self, frame: int, time_s: float, ids: np.ndarray, points: np.ndarray) -> None:
         if len(ids) == 0:
             return
+        slot = len(self.frame_index)
         self.frame_index.append(frame)
         self.frame_time_s.append(time_s)
-        self.ids.append(ids.astype(np.int32, copy=True))
-        self.points.append(points.astype(np.float32, copy=True))
+        start = 0
+        while start < len(ids):
+            if self._fill == _BLOCK_SAMPLES:
+                self._blocks.append((np.empty(_BLOCK_SAMPLES, np.int32), np.empty(_BLOCK_SAMPLES, np.int32),
+                                     np.empty((_BLOCK_SAMPLES, 2), np.float32)))
+                self._fill = 0
+            block_ids, block_slots, block_points = self._blocks[-1]
+            take = min(len(ids) - start, _BLOCK_SAMPLES - self._fill)
+            end = self._fill + take
+            block_ids[self._fill:end] = ids[start:start + take]
+            block_slots[self._fill:end] = slot
+            block_points[self._fill:end] = points[start:start + take]
+            self._fill = end
+            start += take
+
+    def _filled(self, index: int) -> int:
+        return self._fill if index == len(self._blocks) - 1 else _BLOCK_SAMPLES
 
     def frame(self, scale: float) -> pd.DataFrame:
         """The positions as a tidy table sorted by track then frame, in full-resolution pixels,
-        emptying the store as it goes (so a long clip's positions are not held twice).
+        emptying the store as it goes.
 
         Positions stay float32 (the tracker's own precision, ~1e-3 px) to keep long clips small.
+        Rows are placed by a counting sort on the track id (samples are stored frame by frame,
+        and a frame's ids are distinct), straight into the finished columns: no global sort and
+        no concatenated copy of the store.
         """
-        if not self.ids:
+        if not self._blocks:
             return pd.DataFrame({
                 "frame": pd.Series(dtype="int32"), "time_s": pd.Series(dtype="float64"),
                 "track": pd.Series(dtype="int32"), "x_px": pd.Series(dtype="float32"),
                 "y_px": pd.Series(dtype="float32"),
             })
-        counts = np.array([len(ids) for ids in self.ids])
-        row_slot = np.repeat(np.arange(len(counts), dtype=np.int32), counts)
-        ids = np.concatenate(self.ids)
-        self.ids.clear()
-        order = np.argsort(ids, kind="stable")  # rows are stored frame by frame: stable keeps that order
-        ids = ids[order]
-        row_slot = row_slot[order]
-        points = np.concatenate(self.points)
-        self.points.clear()
-        x_px = points[order, 0] / np.float32(scale)
-        y_px = points[order, 1] / np.float32(scale)
-        del points, order
-        table = pd.DataFrame({
-            "frame": np.asarray(self.frame_index, dtype=np.int32)[row_slot],
-            "time_s": np.asarray(self.frame_time_s, dtype=np.float64)[row_slot],
-            "track": ids,
-            "x_px": x_px,
-            "y_px": y_px,
-        }, copy=False)  # pandas copies dict input by default: twice the memory of a long clip
+        tracks = 1 + max(int(ids[:self._filled(i)].max()) for i, (ids, _, _) in enumerate(self._blocks))
+        per_track = np.zeros(tracks, dtype=np.int64)
+        for i, (ids, _, _) in enumerate(self._blocks):
+            per_track += np.bincount(ids[:self._filled(i)], minlength=tracks)
+        total = int(per_track.sum())
+        next_row = np.concatenate([[0], np.cumsum(per_track)[:-1]])
+        frame_index = np.asarray(self.frame_index, dtype=np.int32)
+        frame_time_s = np.asarray(self.frame_time_s, dtype=np.float64)
+        frame = np.empty(total, np.int32)
+        time_s = np.empty(total, np.float64)
+        x_px = np.empty(total, np.float32)
+        y_px = np.empty(total, np.float32)
+        inverse = np.float32(1.0 / scale)
+        count = len(self._blocks)
+        for i in range(count):
+            ids, slots, points = self._blocks[0]
+            filled = _BLOCK_SAMPLES if i < count - 1 else self._fill
+            ids, slots, points = ids[:filled], slots[:filled], points[:filled]
+            # within a block, one frame's samples are consecutive and their ids distinct
+            edges = np.flatnonzero(np.diff(slots)) + 1
+            for part in np.split(np.arange(filled), edges):
+                rows = next_row[ids[part]]
+                next_row[ids[part]] += 1
+                frame[rows] = frame_index[slots[part[0]]]
+                time_s[rows] = frame_time_s[slots[part[0]]]
+                x_px[rows] = points[part, 0] * inverse
+                y_px[rows] = points[part, 1] * inverse
+            del ids, slots, points
+            self._blocks.pop(0)  # freed here: its memory goes back before the next is read
+        self._fill = _BLOCK_SAMPLES
         self.frame_index.clear()
         self.frame_time_s.clear()
-        return table
+        track = np.repeat(np.arange(tracks, dtype=np.int32), per_track)
+        return pd.DataFrame({"frame": frame, "time_s": time_s, "track": track, "x_px": x_px, "y_px": y_px},
+                            copy=False)  # pandas copies dict input by default: twice the memory of a long clip
 
 
 class KltTracker:

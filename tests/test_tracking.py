@@ -58,3 +58,28 @@ def test_reduced_tracking_image_reports_full_resolution(sphere: tuple[Renderer, 
     frames = [Frame(k, k / scene.fps, tracking_image(renderer.render(k), 0.5)) for k in range(30)]
     run = track_frames(frames, (320, 180), config)
     assert run.tracks["x_px"].max() > 160  # positions are scaled back to the 320-px frame
+
+
+def test_store_spanning_many_blocks_gives_the_tidy_table(monkeypatch: pytest.MonkeyPatch) -> None:
+    from rotrate_cli import tracking
+
+    monkeypatch.setattr(tracking, "_BLOCK_SAMPLES", 7)  # frames straddle blocks
+    store = tracking._Tracks()
+    rng = np.random.default_rng(3)
+    expected = []
+    alive = np.arange(5)
+    next_id = 5
+    for frame in range(12):
+        if frame % 3 == 2:  # some points end, new ones start: ids stay increasing per frame
+            alive = np.concatenate([alive[1:], [next_id]])
+            next_id += 1
+        points = rng.uniform(0, 100, (len(alive), 2)).astype(np.float32)
+        store.add(frame + 10, frame / 4, alive, points)
+        expected += [(int(k), frame + 10, frame / 4, float(p[0]) * 2, float(p[1]) * 2) for k, p in zip(alive, points, strict=True)]
+    table = store.frame(scale=0.5)
+    expected.sort()
+    assert list(table.columns) == ["frame", "time_s", "track", "x_px", "y_px"]
+    got = list(zip(table["track"], table["frame"], table["time_s"], table["x_px"], table["y_px"], strict=True))
+    assert len(got) == len(expected)
+    for (k, f, t, x, y), (k2, f2, t2, x2, y2) in zip(got, expected, strict=True):
+        assert (k, f, t) == (k2, f2, t2) and x == pytest.approx(x2, rel=1e-6) and y == pytest.approx(y2, rel=1e-6)
