@@ -75,7 +75,8 @@ def test_store_spanning_many_blocks_gives_the_tidy_table(monkeypatch: pytest.Mon
             next_id += 1
         points = rng.uniform(0, 100, (len(alive), 2)).astype(np.float32)
         store.add(frame + 10, frame / 4, alive, points)
-        expected += [(int(k), frame + 10, frame / 4, float(p[0]) * 2, float(p[1]) * 2) for k, p in zip(alive, points, strict=True)]
+        expected += [(int(k), frame + 10, frame / 4, float(p[0]) * 2, float(p[1]) * 2)
+                     for k, p in zip(alive, points, strict=True)]
     table = store.frame(scale=0.5)
     expected.sort()
     assert list(table.columns) == ["frame", "time_s", "track", "x_px", "y_px"]
