@@ -85,7 +85,10 @@ def suite() -> list[Condition]:
 
 def _clip(condition: Condition) -> tuple[Path, dict]:
     """The rendered clip and its truth, rendered on first use; keyed by the scene's contents."""
-    key = hashlib.sha1(json.dumps(dataclasses.asdict(condition.scene), sort_keys=True).encode()).hexdigest()[:10]
+    # keyed by the settings that differ from the defaults: a new renderer setting leaves the cache valid
+    default = dataclasses.asdict(SceneConfig())
+    changed = {k: v for k, v in dataclasses.asdict(condition.scene).items() if default.get(k) != v}
+    key = hashlib.sha1(json.dumps(changed, sort_keys=True).encode()).hexdigest()[:10]
     path = OUT / f"{condition.name}-{key}.mp4"
     truth_path = path.with_suffix(".json")
     if path.exists() and truth_path.exists():

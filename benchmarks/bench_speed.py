@@ -94,7 +94,7 @@ def child(mode: str, path: Path, fixation: tuple[float, float]) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rounds", type=int, default=3, help="alternating rounds (medians are reported)")
+    parser.add_argument("--rounds", type=int, default=5, help="alternating rounds (medians are reported)")
     args = parser.parse_args()
     short, long, truth = make_clips()
     fixation = truth["fixation"]

@@ -538,8 +538,9 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     blur = tracker.blur_sigma_px
     if blur is None:
         blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
-    frames = video.frames(config.start_s, config.end_s, transform=lambda image: tracking_image(image, scale, blur),
-                          grey=True)
+    # the luma table is known once the stream has read (and checked) its first frame
+    frames = video.frames(config.start_s, config.end_s, grey=True, map_luma=False,
+                          transform=lambda image: tracking_image(image, scale, blur, video.luma_levels()))
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
     return track_frames(prefetch(frames), (info.width_px, info.height_px), tracker, notify)

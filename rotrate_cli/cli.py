@@ -236,6 +236,10 @@ def synth_command(
     jpeg_quality: Annotated[
         int | None, typer.Option("--jpeg-quality", help="Pass each frame through JPEG at this quality (1-100).")
     ] = None,
+    roll: Annotated[float, typer.Option("--roll", help="Camera roll, degrees (the axis's top end leans "
+                                                       "right; 90: a horizontal axis).")] = 0.0,
+    elevation: Annotated[float, typer.Option("--elevation", help="Camera elevation, degrees above the "
+                                                                 "object's mid-height (the top shows).")] = 0.0,
     seed: Annotated[int, typer.Option("--seed", help="Seed of textures and noise.")] = 0,
     force: ForceOption = False,
     debug: DebugOption = False,
@@ -249,7 +253,8 @@ def synth_command(
             raise InputError(f"--size takes WIDTHxHEIGHT such as 640x360; got {size!r}") from None
         scene = SceneConfig(shape=shape, omega_rad_s=omega, fps=fps, duration_s=duration, width_px=width,
                             height_px=height, projection=projection, fov_deg=fov, axis_offset_px=axis_offset,
-                            noise_sigma=noise, jpeg_quality=jpeg_quality, seed=seed)
+                            noise_sigma=noise, jpeg_quality=jpeg_quality, roll_deg=roll, elevation_deg=elevation,
+                            seed=seed)
         truth = write_clip(scene, output, force=force)
         fx, fy = truth["fixation_px"]  # type: ignore[misc]
         Console(highlight=False).print(

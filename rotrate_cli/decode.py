@@ -199,6 +199,7 @@ class FrameSource:
         end_s: float | None = None,
         transform: Callable[[np.ndarray], Any] | None = None,
         grey: bool = False,
+        map_luma: bool = True,
     ) -> Iterator[Frame]:
         """Yield frames whose time lies in ``[start_s, end_s]``, in order, one at a time.
 
@@ -208,15 +209,16 @@ class FrameSource:
 
         With ``grey``, a video's frames come as the grey image ``cv2.COLOR_BGR2GRAY`` would give,
         but taken from the decoder's own luma plane where that checks out against the colour
-        conversion on the first frame (see :meth:`_luma_table`): skipping the conversion to BGR
+        conversion on the first frame (see :meth:`luma_levels`): skipping the conversion to BGR
         and back saves about 40% of the decoding time. Otherwise they are converted from BGR.
+        With ``map_luma=False`` the luma is handed over as it is, for a caller that applies
+        :meth:`luma_levels` itself after reducing the image (cheaper than on the full frame).
         """
         convert = transform if transform is not None else (lambda image: image)
         if grey:
-            table = self._luma_table()
-            if table is not None:
-                yield from self._video_frames(self._open_luma_capture(), start_s, end_s,
-                                              _compose(lambda luma: cv2.LUT(luma, table), convert), quiet=True)
+            luma_frames = self._luma_stream(start_s, end_s, convert, map_luma)
+            if luma_frames is not None:
+                yield from luma_frames
                 return
             convert = _compose(_grey, convert)
         if self._files is not None:
@@ -271,7 +273,7 @@ class FrameSource:
         with _quiet_opencv():
             return cv2.VideoCapture(self._source, cv2.CAP_FFMPEG, [cv2.CAP_PROP_CONVERT_RGB, 0])
 
-    def _luma_table(self) -> np.ndarray | None:
+    def luma_levels(self) -> np.ndarray | None:
         """A 256-entry table taking the decoder's luma to ``COLOR_BGR2GRAY`` grey, or None when
         the decoder cannot give luma for this video (an image sequence, a pixel format other than
         planar 8-bit YUV, a rotated picture, or a first frame too flat to check).
@@ -283,17 +285,22 @@ class FrameSource:
         """
         if self._first_grey is None:
             return None
-        if self._luma is not None:
-            return self._luma[0]
+        if self._luma is None:
+            capture = self._open_luma_capture()
+            try:
+                with _quiet_opencv():
+                    ok, luma = capture.read() if capture.isOpened() else (False, None)
+            finally:
+                capture.release()
+            self._check_luma(luma if ok else None)
+        return self._luma[0] if self._luma is not None else None
+
+    def _check_luma(self, luma: np.ndarray | None) -> None:
+        """Fit and cache the luma table from the decoder's luma of the first frame (see
+        :meth:`luma_levels`); None cached when it does not check out."""
         table = None
-        capture = self._open_luma_capture()
-        try:
-            with _quiet_opencv():
-                ok, luma = capture.read() if capture.isOpened() else (False, None)
-        finally:
-            capture.release()
         size = (self.info.height_px, self.info.width_px)
-        if ok and luma is not None and luma.dtype == np.uint8 and luma.shape == size:
+        if luma is not None and self._first_grey is not None and luma.dtype == np.uint8 and luma.shape == size:
             x = luma[::4, ::4].astype(float).ravel()
             y = self._first_grey.astype(float).ravel()
             if x.std() > 4.0:
@@ -302,7 +309,35 @@ class FrameSource:
                 if _LUMA_GAIN_RANGE[0] <= gain <= _LUMA_GAIN_RANGE[1] and rms <= _LUMA_MAX_RMS:
                     table = np.clip(np.rint(gain * np.arange(256) + bias), 0, 255).astype(np.uint8)
         self._luma = (table,)
-        return table
+
+    def _luma_stream(
+        self, start_s: float, end_s: float | None, convert: Callable[[np.ndarray], Any], map_luma: bool
+    ) -> Iterator[Frame] | None:
+        """The frames from the decoder's luma, or None when the luma does not check out. When
+        the stream starts at the first frame, that frame is the check (no second opening)."""
+        if self._first_grey is None:
+            return None
+        if self._luma is None and start_s <= 0:
+            raw = self._video_frames(self._open_luma_capture(), start_s, end_s, lambda luma: luma, quiet=True)
+            first = next(raw, None)
+            self._check_luma(first.image if first is not None and first.index == 0 else None)
+            table = self._luma[0] if self._luma is not None else None
+            if table is None or first is None:
+                raw.close()
+                return None
+            mapped = _compose(lambda luma: cv2.LUT(luma, table), convert) if map_luma else convert
+
+            def stream() -> Iterator[Frame]:
+                yield Frame(first.index, first.time_s, mapped(first.image))
+                for frame in raw:
+                    yield Frame(frame.index, frame.time_s, mapped(frame.image))
+
+            return stream()
+        table = self.luma_levels()
+        if table is None:
+            return None
+        mapped = _compose(lambda luma: cv2.LUT(luma, table), convert) if map_luma else convert
+        return self._video_frames(self._open_luma_capture(), start_s, end_s, mapped, quiet=True)
 
     def _frame_time_s(self, capture: cv2.VideoCapture, index: int, last_time_s: float) -> float:
         fallback = index / self.info.fps

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -203,6 +204,8 @@ def fit_samples(samples: pd.DataFrame, omega_rad_s: dict[int, float]) -> pd.Data
 
 #: Elements per padded batch in :func:`fit_tracks`: bounds memory whatever the clip's length.
 _BATCH_ELEMENTS = 20_000
+#: Batches fitted at once (threads): memory is this many batches' temporaries.
+_FIT_THREADS = 2
 
 
 #: A batched model: ``(params, rows) -> (predicted, jacobian)`` for the given rows of the batch
@@ -436,6 +439,7 @@ def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None, sen
         else:
             parts.append(part)
     parts.sort(key=lambda p: p.stop - p.start)
+    batches: list[list[slice]] = []
     index = 0
     while index < len(parts):
         batch = [parts[index]]
@@ -446,7 +450,14 @@ def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None, sen
                 break
             batch.append(parts[index])
             index += 1
-        time_s, offset, mask = _pad(times, offsets, batch)
-        for part, fit in zip(batch, _fit_batch(time_s, offset, mask, camera, sense), strict=True):
-            fits[int(tracks[part.start])] = fit
+        batches.append(batch)
+
+    def fit(batch: list[slice]) -> list[TrackFit]:
+        return _fit_batch(*_pad(times, offsets, batch), camera, sense)
+
+    # numpy lets go of the interpreter inside its array loops: two batches at once use both cores
+    with ThreadPoolExecutor(max_workers=_FIT_THREADS) as pool:
+        for batch, batch_fits in zip(batches, pool.map(fit, batches), strict=True):
+            for part, track_fit in zip(batch, batch_fits, strict=True):
+                fits[int(tracks[part.start])] = track_fit
     return fits

@@ -53,6 +53,9 @@ class SceneConfig:
         alpha_rad_s2: angular acceleration; the rate at time t is ``omega_rad_s + alpha_rad_s2 * t``.
         roll_deg: camera roll: the axis's top end leans this many degrees to the right of
             vertical in the image (90: a horizontal axis with its top end to the right).
+        elevation_deg: camera elevation: the camera looks down on the object from this many
+            degrees above its mid-height plane (the top shows; the axis stays upright in the
+            image, tipped towards the camera).
         second_shape: a second solid beside the first (None: none), with its own rate
             ``second_omega_rad_s`` and axis ``second_axis_offset_px`` from the frame centre.
         seed: seeds the textures and the noise: same seed, same clip.
@@ -74,6 +77,7 @@ class SceneConfig:
     jpeg_quality: int | None = None
     alpha_rad_s2: float = 0.0
     roll_deg: float = 0.0
+    elevation_deg: float = 0.0
     second_shape: str | None = None
     second_omega_rad_s: float = 1.0
     second_axis_offset_px: float = 0.0
@@ -100,6 +104,8 @@ def _check(scene: SceneConfig) -> None:
         raise InputError("--jpeg-quality must be between 1 and 100")
     if not 0 < scene.fov_deg < 170:
         raise InputError("--fov must be between 0 and 170 degrees")
+    if not -80 <= scene.elevation_deg <= 80:
+        raise InputError("--elevation must be between -80 and 80 degrees")
 
 
 @dataclass(frozen=True)
@@ -147,7 +153,13 @@ class Renderer:
             direction = np.column_stack([world_x / self._focal_px, world_y / self._focal_px, -np.ones(n)])
             direction /= np.linalg.norm(direction, axis=1, keepdims=True)
             origin = np.tile([0.0, 0.0, self._distance], (n, 1))
-        self._origin, self._direction = origin, direction
+        # elevation: turn the camera about the world's horizontal image axis, so that it looks
+        # down at the object's centre from above its mid-height plane
+        tilt = math.radians(scene.elevation_deg)
+        to_world = np.array([[1.0, 0.0, 0.0],
+                             [0.0, math.cos(tilt), -math.sin(tilt)],
+                             [0.0, math.sin(tilt), math.cos(tilt)]])
+        self._origin, self._direction = origin @ to_world, direction @ to_world
         tints = {"box": (0.55, 0.75, 1.0), "cylinder": (0.5, 1.0, 0.7), "sphere": (1.0, 0.8, 0.55)}
         self._bodies = [_Body(scene.shape, scene.omega_rad_s, scene.alpha_rad_s2, scene.axis_offset_px / self._scale,
                               self._solid_texture(rng), np.array(tints[scene.shape]))]

@@ -97,14 +97,21 @@ def tracking_scale(width_px: int, config: TrackerConfig) -> float:
     return min(1.0, config.track_width_px / float(width_px))
 
 
-def tracking_image(image: np.ndarray, scale: float, blur_sigma_px: float = 0.0) -> np.ndarray:
-    """Grey, reduced (and lightly blurred) copy of a BGR frame, as the tracker wants it. Cheap
-    enough for the decode thread."""
+def tracking_image(
+    image: np.ndarray, scale: float, blur_sigma_px: float = 0.0, levels: np.ndarray | None = None
+) -> np.ndarray:
+    """Grey, reduced (and lightly blurred) copy of a BGR or grey frame, as the tracker wants it.
+    Cheap enough for the decode thread. ``levels`` (a 256-entry table, see
+    :meth:`rotrate_cli.decode.FrameSource.luma_levels`) maps a decoder's luma to grey; applied
+    after the reduction, on fewer pixels (the reduction and blur are linear, so the order does
+    not matter beyond rounding)."""
     grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
     if scale < 1.0:
         grey = cv2.resize(grey, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
     if blur_sigma_px > 0:
         grey = cv2.GaussianBlur(grey, (0, 0), blur_sigma_px)
+    if levels is not None:
+        grey = cv2.LUT(grey, levels)
     return grey
 
 

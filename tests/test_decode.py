@@ -94,7 +94,7 @@ def test_grey_frames_match_the_colour_conversion_and_keep_the_times() -> None:
     source = FrameSource(SAMPLES / "cylinder_ortho.mp4")
     colour = list(source.frames(end_s=1.0))
     grey = list(source.frames(end_s=1.0, grey=True))
-    assert source._luma_table() is not None  # the fast path is taken on our own H.264 clips
+    assert source.luma_levels() is not None  # the fast path is taken on our own H.264 clips
     assert [f.time_s for f in grey] == [f.time_s for f in colour]
     for c, g in zip(colour, grey, strict=True):
         expected = cv2.cvtColor(c.image, cv2.COLOR_BGR2GRAY).astype(int)
@@ -107,3 +107,16 @@ def test_grey_frames_of_an_image_sequence(tmp_path: Path) -> None:
     _write_images(tmp_path, ["a1.png", "a2.png"])
     frames = list(FrameSource(tmp_path, fps=1).frames(grey=True, transform=lambda image: image[:2, :2]))
     assert [f.image.tolist() for f in frames] == [[[0, 0], [0, 0]], [[10, 10], [10, 10]]]
+
+
+def test_luma_levels_applied_after_the_reduction_give_the_same_tracking_image() -> None:
+    from rotrate_cli.tracking import tracking_image
+
+    source = FrameSource(SAMPLES / "box_ortho.mp4")
+    levels = source.luma_levels()
+    assert levels is not None
+    colour = next(iter(source.frames()))
+    luma = next(iter(source.frames(grey=True, map_luma=False)))
+    expected = tracking_image(colour.image, 0.5, 1.0).astype(int)
+    got = tracking_image(luma.image, 0.5, 1.0, levels).astype(int)
+    assert got.shape == expected.shape and np.abs(got - expected).max() <= 2
