@@ -24,8 +24,28 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from rotrate_cli import rates
 from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks
-from rotrate_cli.errors import InputError, RotrateError
-from rotrate_cli.report import FORMATS, check_output_path, render, render_table, series_csv, write_text
+from rotrate_cli.batch import (
+    Job,
+    batch_exit_code,
+    check_expectation,
+    check_expected,
+    expand_inputs,
+    read_manifest,
+    run_batch,
+)
+from rotrate_cli.errors import InputError, OutputError, RotrateError
+from rotrate_cli.report import (
+    FORMATS,
+    check_output_path,
+    junit_xml,
+    render,
+    render_check,
+    render_summary,
+    render_table,
+    series_csv,
+    summary_text,
+    write_text,
+)
 from rotrate_cli.synth import PROJECTIONS, SHAPES, SceneConfig, write_clip
 from rotrate_cli.tracking import Roi, TrackerConfig
 from rotrate_cli.tracks_io import read_tracks
@@ -122,7 +142,8 @@ def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | N
 
 @app.command("analyze")
 def analyze_command(
-    video: Annotated[str, typer.Argument(help="Video file, image folder, or printf pattern like frames/img.%03d.png.")],
+    videos: Annotated[list[str], typer.Argument(help="Video file(s), image folder, printf pattern like "
+                                                      "frames/img.%03d.png, folders of videos, or globs.")],
     fixation: Annotated[str | None, typer.Option("--fixation", help="X,Y pixel of a point on the rotation axis, or "
                                                                     "'auto' to find the axis from the motion "
                                                                     "(required, except with --segment).")] = None,
@@ -149,13 +170,24 @@ def analyze_command(
                                                             "bodies by rate and axis and report each.")] = False,
     blur: Annotated[float | None, typer.Option("--blur", help="Blur (sigma, px) before tracking; default 1 "
                                                               "for videos, 0 for image sequences.")] = None,
+    expect: Annotated[float | None, typer.Option("--expect", help="Expected omega, rad/s: exit 1 when the "
+                                                                  "result is outside --tolerance of it.")] = None,
+    tolerance: Annotated[float | None, typer.Option("--tolerance", help="Tolerance of --expect, percent.")] = None,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Inputs analysed at once (processes).")] = 1,
+    output_dir: Annotated[Path | None, typer.Option("--output-dir", help="With several inputs: write each "
+                                                                         "one's report here as STEM.json "
+                                                                         "(STEM.csv with --format csv).")] = None,
     fmt: FormatOption = "table",
     output: OutputOption = None,
     force: ForceOption = False,
     quiet: QuietOption = False,
     debug: DebugOption = False,
 ) -> None:
-    """Track points on the spinning object and report its rotation rate."""
+    """Track points on the spinning object(s) and report the rotation rate.
+
+    With several inputs (files, folders of videos, globs) each gets one summary row and a bad
+    input does not stop the others; the exit code is the worst input's.
+    """
 
     def job() -> int:
         _check_format(fmt)
@@ -179,13 +211,101 @@ def analyze_command(
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
                                 axis_angle_deg=axis_angle, window_s=window, start_s=start, end_s=end, every=every,
                                 method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker, segment=segment)
+        check_expectation(expect, tolerance)
+        sources = expand_inputs(videos)
+        if len(videos) > 1 or sources != videos:
+            if series_csv_path is not None:
+                raise InputError("--series-csv takes one input; with several, --output-dir holds each one's series")
+            return _batch(sources, config, expect, tolerance, jobs, output_dir, fmt, output, force)
+        if output_dir is not None:
+            raise InputError("--output-dir is for several inputs; with one, use --output")
         with _progress_bar(quiet) as progress:
-            analysis = analyze(video, config, progress)
+            analysis = analyze(sources[0], config, progress)
         _emit(analysis, fmt, output, force)
         if series_csv_path is not None:
             write_text(series_csv_path, series_csv(analysis), force)
         for warning in analysis.warnings:
             Console(stderr=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
+        if expect is not None and tolerance is not None:
+            miss = check_expected(analysis.omega_rad_s, expect, tolerance)
+            if miss:
+                raise _fail(miss, 1)
+        return 0
+
+    code = _run(debug, job)
+    if code:
+        raise typer.Exit(code)
+
+
+def _wide_console() -> Console:
+    """stdout, at least 140 columns wide when it is not a terminal (file names stay whole in logs)."""
+    console = Console(highlight=False)
+    return console if console.is_terminal else Console(highlight=False, width=max(console.width, 140))
+
+
+def _detail_paths(sources: list[str], folder: Path, suffix: str) -> list[Path]:
+    """``folder/STEM.suffix`` per source, numbered where two sources share a stem."""
+    paths, seen = [], {}
+    for source in sources:
+        stem = Path(source.rstrip("/")).stem.replace("%", "") or "input"
+        seen[stem] = seen.get(stem, 0) + 1
+        paths.append(folder / (f"{stem}{suffix}" if seen[stem] == 1 else f"{stem}-{seen[stem]}{suffix}"))
+    return paths
+
+
+def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tolerance: float | None, jobs: int,
+           output_dir: Path | None, fmt: str, output: Path | None, force: bool) -> int:
+    """Analyse several inputs; one summary row each; the worst input's exit code."""
+    details: list[Path] = []
+    if output_dir is not None:
+        if not output_dir.is_dir():
+            raise OutputError(f"--output-dir {output_dir} is not a folder; create it first")
+        details = _detail_paths(sources, output_dir, ".csv" if fmt == "csv" else ".json")
+        for path in details:
+            check_output_path(path, force)  # before a long run, not after
+    outcomes = run_batch([Job(source, config, expect, tolerance) for source in sources], jobs)
+    for outcome, path in zip(outcomes, details, strict=False):
+        if outcome.analysis is not None:
+            write_text(path, render(outcome.analysis, "csv" if fmt == "csv" else "json"), force)
+    if output is not None:
+        write_text(output, summary_text(outcomes, fmt), force)
+    elif fmt == "table":
+        render_summary(outcomes, _wide_console())
+    else:
+        sys.stdout.write(summary_text(outcomes, fmt))
+        sys.stdout.flush()
+    return batch_exit_code(outcomes)
+
+
+@app.command("check")
+def check_command(
+    manifest: Annotated[Path, typer.Argument(help="CSV: file, expected_omega, tolerance_pct, and optional "
+                                                  "per-row fixation, fov, focal_px, fps, axis_angle, every, "
+                                                  "method, start, end.")],
+    junit: Annotated[Path | None, typer.Option("--junit", help="Also write JUnit XML here, for CI.")] = None,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Rows analysed at once (processes).")] = 1,
+    fmt: FormatOption = "table",
+    force: ForceOption = False,
+    debug: DebugOption = False,
+) -> None:
+    """Run a regression manifest: pass when every file's omega is within its tolerance."""
+
+    def job() -> int:
+        _check_format(fmt)
+        if junit is not None:
+            check_output_path(junit, force)
+        jobs_list = read_manifest(manifest, AnalysisConfig(fixation_px=None))
+        outcomes = run_batch(jobs_list, jobs)
+        expected = [(j.expected_rad_s or math.nan, j.tolerance_pct or 0.0) for j in jobs_list]
+        if junit is not None:
+            write_text(junit, junit_xml(outcomes, expected, manifest.stem), force)
+        if fmt == "table":
+            render_check(outcomes, expected, _wide_console())
+        else:
+            sys.stdout.write(summary_text(outcomes, fmt))
+        failed = sum(o.status != "ok" for o in outcomes)
+        if failed:
+            raise _fail(f"{failed} of {len(outcomes)} manifest rows failed", 1)
         return 0
 
     _run(debug, job)

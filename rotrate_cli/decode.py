@@ -75,7 +75,7 @@ def _quiet_opencv() -> Iterator[None]:
     """Silence OpenCV's log for a while: the FFmpeg backend warns on stderr every time it is
     asked for undecoded (luma) frames, which we check ourselves."""
     level = cv2.utils.logging.getLogLevel()
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    cv2.utils.logging.setLogLevel(min(level, cv2.utils.logging.LOG_LEVEL_ERROR))
     try:
         yield
     finally:

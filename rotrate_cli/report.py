@@ -15,12 +15,14 @@ import tempfile
 from collections import Counter
 from pathlib import Path
 from typing import Any
+from xml.etree import ElementTree as ET
 
 import pandas as pd
 from rich.console import Console
 from rich.table import Table
 
 from rotrate_cli.analysis import Analysis
+from rotrate_cli.batch import Outcome, summary_frame
 from rotrate_cli.errors import OutputError
 
 FORMATS = ("table", "csv", "json")
@@ -219,3 +221,66 @@ def write_text(path: Path, text: str, force: bool) -> None:
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
+
+
+def summary_text(outcomes: list[Outcome], fmt: str) -> str:
+    """A batch's summary, one row per input, as ``csv`` or ``json`` text (``table``: plain)."""
+    table = summary_frame(outcomes)
+    if fmt == "csv":
+        return table.to_csv(index=False, float_format="%.6g", lineterminator="\n")
+    if fmt == "json":
+        rows = [{k: (_number(v) if isinstance(v, float) else v) for k, v in row.items()}
+                for row in table.to_dict("records")]
+        return json.dumps({"inputs": rows}, indent=2, allow_nan=False) + "\n"
+    buffer = io.StringIO()
+    render_summary(outcomes, Console(file=buffer, width=140, color_system=None, force_terminal=False))
+    return buffer.getvalue()
+
+
+def render_summary(outcomes: list[Outcome], console: Console) -> None:
+    """A batch's summary table for the terminal."""
+    table = Table(title=f"rotrate: {len(outcomes)} inputs", title_justify="left")
+    for name in ("file", "status", "omega rad/s", "95% interval", "rpm", "direction", "tracks", "error"):
+        table.add_column(name, justify="right" if name in ("omega rad/s", "rpm", "tracks") else "left",
+                         overflow="fold")
+    for row in summary_frame(outcomes).itertuples(index=False):
+        ok = math.isfinite(row.omega)
+        table.add_row(str(row.file), str(row.status), f"{row.omega:.4f}" if ok else "",
+                      f"[{row.omega_low:.4f}, {row.omega_high:.4f}]" if ok and math.isfinite(row.omega_low) else "",
+                      f"{row.rpm:.3f}" if ok else "", str(row.direction), str(row.tracks_used) if ok else "",
+                      str(row.error))
+    console.print(table)
+
+
+def render_check(outcomes: list[Outcome], expected: list[tuple[float, float]], console: Console) -> None:
+    """``rotrate check``'s pass/fail table."""
+    table = Table(title=f"rotrate check: {len(outcomes)} files", title_justify="left")
+    for name in ("file", "expected", "omega rad/s", "error %", "tolerance %", "result", "message"):
+        table.add_column(name, justify="left" if name in ("file", "result", "message") else "right",
+                         overflow="fold")
+    for outcome, (omega, tolerance) in zip(outcomes, expected, strict=True):
+        measured = outcome.analysis.omega_rad_s if outcome.analysis is not None else math.nan
+        error = 100.0 * (measured / omega - 1.0) if math.isfinite(measured) else math.nan
+        table.add_row(outcome.source, f"{omega:g}", f"{measured:.4f}" if math.isfinite(measured) else "",
+                      f"{error:+.2f}" if math.isfinite(error) else "", f"{tolerance:g}",
+                      "pass" if outcome.status == "ok" else "FAIL", outcome.error)
+    console.print(table)
+
+
+def junit_xml(outcomes: list[Outcome], expected: list[tuple[float, float]], suite: str) -> str:
+    """JUnit XML for CI systems: one test case per manifest row; ``expected`` holds each row's
+    (expected omega, tolerance %)."""
+    failures = sum(o.status in ("off_target", "no_result") for o in outcomes)
+    errors = sum(o.status in ("bad_input", "failed") for o in outcomes)
+    root = ET.Element("testsuite", name=suite, tests=str(len(outcomes)), failures=str(failures), errors=str(errors))
+    for outcome, (omega, tolerance) in zip(outcomes, expected, strict=True):
+        case = ET.SubElement(root, "testcase", classname=suite, name=outcome.source)
+        measured = outcome.analysis.omega_rad_s if outcome.analysis is not None else math.nan
+        ET.SubElement(case, "system-out").text = (
+            f"expected {omega:g} rad/s +-{tolerance:g}%; measured {measured:.6g} rad/s")
+        if outcome.status in ("off_target", "no_result"):
+            ET.SubElement(case, "failure", message=outcome.error, type=outcome.status)
+        elif outcome.status != "ok":
+            ET.SubElement(case, "error", message=outcome.error, type=outcome.status)
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

@@ -1,0 +1,254 @@
+"""Many inputs in one run: one outcome per input, a bad input never stops the others.
+
+:func:`expand_inputs` turns what the user typed (files, folders of videos, globs; a folder of
+images stays one image-sequence input) into sources; :func:`run_batch` analyses each, in
+parallel processes when asked, and returns an :class:`Outcome` per source in the order given,
+whatever the order they finished in. :func:`check_expected` is the CI regression rule, and
+:func:`read_manifest` reads the manifest of ``rotrate check``.
+"""
+
+from __future__ import annotations
+
+import glob
+import math
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import pandas as pd
+
+from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze
+from rotrate_cli.errors import InputError, NoResultError, RotrateError
+
+VIDEO_SUFFIXES = frozenset({".mp4", ".mov", ".avi", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"})
+SUMMARY_COLUMNS = ("file", "status", "omega", "omega_low", "omega_high", "rpm", "direction", "tracks_used", "error")
+#: Outcome statuses and the exit code each stands for (a batch exits with the largest).
+STATUS_CODES = {"ok": 0, "off_target": 1, "no_result": 1, "bad_input": 2, "failed": 3}
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What one input gave.
+
+    Attributes:
+        source: the input as expanded.
+        status: ``ok``, ``off_target`` (outside ``--expect``'s band), ``no_result`` (read, but
+            no trustworthy rate), ``bad_input`` or ``failed`` (an unexpected error).
+        analysis: the analysis when there was one (``ok`` and ``off_target``), else None.
+        error: one line saying what went wrong ("" when nothing did).
+    """
+
+    source: str
+    status: str
+    analysis: Analysis | None
+    error: str = ""
+
+    @property
+    def exit_code(self) -> int:
+        """The exit code this outcome alone would give."""
+        return STATUS_CODES[self.status]
+
+
+def expand_inputs(items: Sequence[str]) -> list[str]:
+    """Sources from what the user typed: a glob becomes its matches (sorted), a folder holding
+    videos becomes those videos, anything else (a video, a folder of images, a printf pattern,
+    a path that does not exist) stays as it is, to be analysed or reported. Duplicates are
+    dropped, the first kept."""
+    sources: list[str] = []
+    for item in items:
+        path = Path(item)
+        if not path.exists() and any(c in item for c in "*?["):
+            matches = sorted(glob.glob(item))
+            sources.extend(matches if matches else [item])
+        elif path.is_dir():
+            videos = sorted(str(p) for p in path.iterdir() if p.is_file() and p.suffix.lower() in VIDEO_SUFFIXES)
+            sources.extend(videos if videos else [item])
+        else:
+            sources.append(item)
+    return list(dict.fromkeys(sources))
+
+
+def check_expected(omega_rad_s: float, expected_rad_s: float, tolerance_pct: float) -> str:
+    """"" when ``omega_rad_s`` lies within ``tolerance_pct`` percent of ``expected_rad_s``,
+    else one line saying by how much it misses.
+
+    The rule is the point estimate's distance, not an overlap of the 95% interval with the band:
+    a CI check is there to catch drift, and a run whose interval widened (fewer tracks, a noisy
+    clip) would pass an overlap rule while its estimate wandered off.
+    """
+    error_pct = 100.0 * (omega_rad_s / expected_rad_s - 1.0) if expected_rad_s else math.inf
+    if math.isfinite(error_pct) and abs(error_pct) <= tolerance_pct:
+        return ""
+    return (f"omega {omega_rad_s:.6g} rad/s is {error_pct:+.2f}% from the expected {expected_rad_s:g} "
+            f"(tolerance {tolerance_pct:g}%)")
+
+
+def check_expectation(expected_rad_s: float | None, tolerance_pct: float | None) -> None:
+    """Raise InputError unless the ``--expect``/``--tolerance`` pair is usable."""
+    if expected_rad_s is None and tolerance_pct is None:
+        return
+    if expected_rad_s is None or tolerance_pct is None:
+        raise InputError("--expect and --tolerance go together: --expect OMEGA --tolerance PERCENT")
+    if not (math.isfinite(expected_rad_s) and expected_rad_s > 0):
+        raise InputError("--expect takes the expected rate in rad/s, a positive number")
+    if not (math.isfinite(tolerance_pct) and tolerance_pct >= 0):
+        raise InputError("--tolerance takes a percentage, 0 or more")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One input of a batch: the source, its configuration, and an optional expected rate."""
+
+    source: str
+    config: AnalysisConfig
+    expected_rad_s: float | None = None
+    tolerance_pct: float | None = None
+
+
+def run_one(job: Job) -> Outcome:
+    """Analyse one input; every failure becomes an outcome, never an exception (except an
+    interrupt, which stops the batch)."""
+    try:
+        analysis = analyze(job.source, job.config)
+    except InputError as exc:
+        return Outcome(job.source, "bad_input", None, str(exc))
+    except NoResultError as exc:
+        return Outcome(job.source, "no_result", None, str(exc))
+    except RotrateError as exc:
+        return Outcome(job.source, "bad_input" if exc.exit_code == 2 else "no_result", None, str(exc))
+    except MemoryError:
+        return Outcome(job.source, "failed", None, "ran out of memory; try --end or --every to analyse less")
+    except Exception as exc:  # noqa: BLE001 - one bad input must not stop the batch
+        return Outcome(job.source, "failed", None, f"unexpected {type(exc).__name__}: {exc}")
+    if job.expected_rad_s is not None and job.tolerance_pct is not None:
+        miss = check_expected(analysis.omega_rad_s, job.expected_rad_s, job.tolerance_pct)
+        if miss:
+            return Outcome(job.source, "off_target", analysis, miss)
+    return Outcome(job.source, "ok", analysis)
+
+
+def run_batch(jobs: Sequence[Job], workers: int = 1, done: Callable[[Outcome], None] | None = None) -> list[Outcome]:
+    """Run ``jobs`` (in ``workers`` processes when more than 1) and return their outcomes in
+    the order of ``jobs``. ``done`` is called as each finishes (in order)."""
+    if workers < 1:
+        raise InputError("--jobs takes a number of processes, 1 or more")
+    outcomes: list[Outcome] = []
+    if workers == 1 or len(jobs) <= 1:
+        for job in jobs:
+            outcomes.append(run_one(job))
+            if done is not None:
+                done(outcomes[-1])
+        return outcomes
+    with ProcessPoolExecutor(max_workers=min(workers, len(jobs), os.cpu_count() or workers)) as pool:
+        for outcome in pool.map(run_one, jobs):
+            outcomes.append(outcome)
+            if done is not None:
+                done(outcome)
+    return outcomes
+
+
+def summary_frame(outcomes: Sequence[Outcome]) -> pd.DataFrame:
+    """One row per input: ``file, status, omega, omega_low, omega_high, rpm, direction,
+    tracks_used, error`` (rad/s; empty where there is no analysis)."""
+    rows = []
+    for outcome in outcomes:
+        a = outcome.analysis
+        rows.append({
+            "file": outcome.source, "status": outcome.status,
+            "omega": a.omega_rad_s if a else math.nan,
+            "omega_low": a.omega_low_rad_s if a else math.nan,
+            "omega_high": a.omega_high_rad_s if a else math.nan,
+            "rpm": a.rpm if a else math.nan,
+            "direction": a.direction if a else "",
+            "tracks_used": a.tracks_used if a else 0,
+            "error": outcome.error,
+        })
+    return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
+
+
+def batch_exit_code(outcomes: Sequence[Outcome]) -> int:
+    """0 when every input gave a result within its expectation, else the worst outcome's code."""
+    return max((o.exit_code for o in outcomes), default=0)
+
+
+#: Manifest columns: required, and optional per-row options (as on the command line).
+MANIFEST_REQUIRED = ("file", "expected_omega", "tolerance_pct")
+MANIFEST_OPTIONAL = ("fixation", "fov", "focal_px", "fps", "axis_angle", "every", "method", "start", "end")
+
+
+def read_manifest(path: Path, base: AnalysisConfig) -> list[Job]:
+    """The jobs of a ``rotrate check`` manifest: a CSV with ``file, expected_omega,
+    tolerance_pct`` and optionally ``fixation`` (``X,Y`` or ``auto``, the default), ``fov``,
+    ``focal_px``, ``fps``, ``axis_angle``, ``every``, ``method``, ``start``, ``end``. Files are
+    relative to the manifest's folder.
+
+    Raises:
+        InputError: the manifest is missing, unreadable, or a row is malformed (saying which).
+    """
+    if not path.is_file():
+        raise InputError(f"no such manifest: {path}")
+    try:
+        table = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise InputError(f"could not read the manifest {path} as CSV ({type(exc).__name__})") from None
+    table.columns = [str(c).strip() for c in table.columns]
+    missing = [c for c in MANIFEST_REQUIRED if c not in table.columns]
+    if missing:
+        raise InputError(f"the manifest {path} lacks the column(s) {', '.join(missing)}; "
+                         f"it needs {', '.join(MANIFEST_REQUIRED)}")
+    unknown = [c for c in table.columns if c not in MANIFEST_REQUIRED + MANIFEST_OPTIONAL]
+    if unknown:
+        raise InputError(f"the manifest {path} has unknown column(s) {', '.join(unknown)}; "
+                         f"optional ones are {', '.join(MANIFEST_OPTIONAL)}")
+    if table.empty:
+        raise InputError(f"the manifest {path} lists no file")
+    jobs = []
+    for number, row in enumerate(table.to_dict("records"), start=2):  # line 1 is the header
+        jobs.append(_manifest_job(path, number, {k: str(v).strip() for k, v in row.items()}, base))
+    return jobs
+
+
+def _manifest_job(path: Path, line: int, row: dict[str, str], base: AnalysisConfig) -> Job:
+    where = f"{path}, line {line}"
+
+    def number(name: str, default: float | None = None) -> float | None:
+        text = row.get(name, "")
+        if text == "":
+            return default
+        try:
+            value = float(text)
+        except ValueError:
+            raise InputError(f"{where}: {name} must be a number; got {text!r}") from None
+        if not math.isfinite(value):
+            raise InputError(f"{where}: {name} must be a finite number; got {text!r}")
+        return value
+
+    if not row["file"]:
+        raise InputError(f"{where}: the file is empty")
+    expected, tolerance = number("expected_omega"), number("tolerance_pct")
+    if expected is None or tolerance is None:
+        raise InputError(f"{where}: expected_omega and tolerance_pct are required")
+    check_expectation(expected, tolerance)
+    fixation_text = row.get("fixation", "") or "auto"
+    fixation: tuple[float, float] | None = None
+    if fixation_text.lower() != "auto":
+        parts = fixation_text.split(",")
+        try:
+            fixation = (float(parts[0]), float(parts[1])) if len(parts) == 2 else None
+        except ValueError:
+            fixation = None
+        if fixation is None:
+            raise InputError(f"{where}: fixation must be X,Y or auto; got {fixation_text!r}")
+    every = number("every", 1)
+    end = number("end")
+    config = replace(
+        base, fixation_px=fixation, fov_deg=number("fov"), focal_px=number("focal_px"), fps=number("fps"),
+        axis_angle_deg=number("axis_angle"), every=int(every or 1), method=row.get("method", "") or base.method,
+        start_s=number("start", 0.0) or 0.0, end_s=end,
+    )
+    source = Path(row["file"])
+    if not source.is_absolute():
+        source = path.parent / source
+    return Job(str(source), config, expected, tolerance)

@@ -1,0 +1,163 @@
+"""Batch runs, CI regression checks, and bad input in a batch (issue 5)."""
+
+from __future__ import annotations
+
+import io
+import json
+import shutil
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from rotrate_cli.batch import SUMMARY_COLUMNS, check_expected, expand_inputs
+from rotrate_cli.cli import app
+from tests.conftest import SAMPLES
+
+runner = CliRunner()
+CLIPS = [SAMPLES / f"{name}.mp4" for name in ("box_ortho", "cylinder_ortho", "sphere_ortho")]
+
+
+@pytest.fixture
+def broken(tmp_path: Path) -> list[Path]:
+    """Three bad inputs: text named .mp4, an empty file, a file that does not exist."""
+    text = tmp_path / "notes.mp4"
+    text.write_text("not a video")
+    empty = tmp_path / "empty.mp4"
+    empty.write_bytes(b"")
+    return [text, empty, tmp_path / "missing.mp4"]
+
+
+def _batch(*args: str) -> tuple[int, str, str]:
+    result = runner.invoke(app, ["analyze", *args])
+    return result.exit_code, result.stdout, result.stderr
+
+
+def test_a_batch_gives_one_row_per_input_and_goes_past_bad_files(broken: list[Path], tmp_path: Path) -> None:
+    out = tmp_path / "reports"
+    out.mkdir()
+    code, stdout, stderr = _batch(*map(str, CLIPS + broken), "--fixation", "auto", "--format", "csv",
+                                  "--output-dir", str(out))
+    assert code == 2  # the worst input was bad input
+    assert "Traceback" not in stdout + stderr
+    table = pd.read_csv(io.StringIO(stdout)).fillna({"error": "", "direction": ""})
+    assert tuple(table.columns) == SUMMARY_COLUMNS
+    assert table["file"].tolist() == [str(p) for p in CLIPS + broken]
+    assert table["status"].tolist() == ["ok"] * 3 + ["bad_input"] * 3
+    for expected, row in zip((0.6, 0.4, 1.0), table.head(3).itertuples(), strict=True):
+        assert row.omega == pytest.approx(expected, rel=0.01)
+    assert "could not" in table.loc[3, "error"] and "empty" in table.loc[4, "error"]
+    assert "no such file" in table.loc[5, "error"]
+    assert sorted(p.name for p in out.iterdir()) == ["box_ortho.csv", "cylinder_ortho.csv", "sphere_ortho.csv"]
+
+
+def test_parallel_and_serial_batches_agree_row_for_row(broken: list[Path]) -> None:
+    inputs = [*map(str, CLIPS[:2]), str(broken[0])]
+    serial = _batch(*inputs, "--fixation", "auto", "--format", "json")
+    parallel = _batch(*inputs, "--fixation", "auto", "--format", "json", "--jobs", "2")
+    assert serial[0] == parallel[0] == 2
+    assert json.loads(serial[1]) == json.loads(parallel[1])
+
+
+def test_all_good_inputs_exit_zero_and_the_table_lists_them(tmp_path: Path) -> None:
+    folder = tmp_path / "clips"
+    folder.mkdir()
+    for clip in CLIPS[:2]:
+        shutil.copy(clip, folder / clip.name)
+    code, stdout, _ = _batch(str(folder), "--fixation", "auto")  # a folder of videos is a batch
+    assert code == 0
+    assert "box_ortho.mp4" in stdout and "cylinder_ortho.mp4" in stdout and "ok" in stdout
+
+
+def test_expect_and_tolerance_on_one_input() -> None:
+    clip = str(CLIPS[0])
+    assert _batch(clip, "--fixation", "319.5,179.5", "-f", "json", "--expect", "0.6", "--tolerance", "1")[0] == 0
+    code, stdout, stderr = _batch(clip, "--fixation", "319.5,179.5", "-f", "json", "--expect", "0.5",
+                                  "--tolerance", "2")
+    assert code == 1
+    assert json.loads(stdout)["omega"] == pytest.approx(0.6, rel=0.01)  # the report is still there
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and "from the expected 0.5" in lines[0]
+
+
+def test_expect_in_a_batch_marks_rows_off_target() -> None:
+    code, stdout, _ = _batch(*map(str, CLIPS[:2]), "--fixation", "auto", "-f", "csv", "--expect", "0.6",
+                             "--tolerance", "1")
+    table = pd.read_csv(io.StringIO(stdout))
+    assert table["status"].tolist() == ["ok", "off_target"] and code == 1
+
+
+@pytest.mark.parametrize(("options", "word"), [
+    (["--expect", "0.5"], "--tolerance"),
+    (["--expect", "-1", "--tolerance", "1"], "--expect"),
+    (["--expect", "0.5", "--tolerance", "-3"], "--tolerance"),
+    (["--output-dir", "."], "--output-dir"),
+])
+def test_expectation_and_output_dir_usage_errors(options: list[str], word: str) -> None:
+    code, _, stderr = _batch(str(CLIPS[0]), "--fixation", "auto", *options)
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert code == 2 and len(lines) == 1 and word in lines[0]
+
+
+def test_existing_detail_reports_are_kept_without_force(tmp_path: Path) -> None:
+    (tmp_path / "box_ortho.json").write_text("mine")
+    code, _, stderr = _batch(*map(str, CLIPS[:2]), "--fixation", "auto", "--output-dir", str(tmp_path))
+    assert code == 2 and "--force" in stderr
+    assert (tmp_path / "box_ortho.json").read_text() == "mine"
+    assert not (tmp_path / "cylinder_ortho.json").exists()  # refused before running anything
+
+
+def test_the_sample_manifest_passes_and_writes_junit(tmp_path: Path) -> None:
+    junit = tmp_path / "junit.xml"
+    result = runner.invoke(app, ["check", str(SAMPLES / "manifest.csv"), "--junit", str(junit)])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.count("pass") == 6
+    suite = ET.parse(junit).getroot()
+    assert suite.tag == "testsuite" and suite.get("tests") == "6" and suite.get("failures") == "0"
+
+
+def test_a_failing_manifest_row_fails_the_check(tmp_path: Path, broken: list[Path]) -> None:
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(f"file,expected_omega,tolerance_pct,fixation\n{CLIPS[0]},0.6,1,auto\n"
+                        f"{CLIPS[1]},0.5,1,auto\n{broken[0]},1,1,auto\n")
+    junit = tmp_path / "junit.xml"
+    result = runner.invoke(app, ["check", str(manifest), "--junit", str(junit)])
+    assert result.exit_code == 1
+    assert result.stdout.count("FAIL") == 2
+    assert "2 of 3 manifest rows failed" in result.stderr
+    suite = ET.parse(junit).getroot()
+    assert (suite.get("failures"), suite.get("errors")) == ("1", "1")
+
+
+@pytest.mark.parametrize(("text", "word"), [
+    ("file,expected_omega\nx.mp4,1\n", "tolerance_pct"),
+    ("file,expected_omega,tolerance_pct\nx.mp4,fast,1\n", "line 2"),
+    ("file,expected_omega,tolerance_pct,colour\nx.mp4,1,1,red\n", "colour"),
+    ("file,expected_omega,tolerance_pct,fixation\nx.mp4,1,1,3\n", "fixation"),
+    ("file,expected_omega,tolerance_pct\n", "no file"),
+])
+def test_bad_manifests_are_usage_errors(tmp_path: Path, text: str, word: str) -> None:
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(text)
+    result = runner.invoke(app, ["check", str(manifest)])
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.exit_code == 2 and len(lines) == 1 and word in lines[0]
+
+
+def test_inputs_expand_globs_and_folders_of_videos(tmp_path: Path) -> None:
+    for name in ("b.mp4", "a.mov", "notes.txt"):
+        (tmp_path / name).write_bytes(b"x")
+    images = tmp_path / "frames"
+    images.mkdir()
+    (images / "f1.png").write_bytes(b"x")
+    assert expand_inputs([str(tmp_path)]) == [str(tmp_path / "a.mov"), str(tmp_path / "b.mp4"), str(images)][:2]
+    assert expand_inputs([str(tmp_path / "*.mp4"), str(tmp_path / "b.mp4")]) == [str(tmp_path / "b.mp4")]
+    assert expand_inputs([str(images)]) == [str(images)]  # a folder of images is one image sequence
+    assert expand_inputs([str(tmp_path / "none*.mp4")]) == [str(tmp_path / "none*.mp4")]  # reported, not lost
+
+
+def test_the_expectation_rule_is_the_point_estimate() -> None:
+    assert check_expected(0.605, 0.6, 1) == ""
+    assert "+1.67%" in check_expected(0.61, 0.6, 1)
