@@ -308,26 +308,39 @@ def _fit_batch(
     valid = (n >= 4) & np.isfinite(omega) & (omega > 0) & (cosine < 1.0)
     omega = np.where(valid, omega, 1.0)
 
+    # the orthographic fit runs on each track's offsets divided by their rms, so that it does
+    # not depend on the positions' units (a degenerate track's iterations otherwise can)
+    unit = np.sqrt((y * y).sum(axis=1) / np.maximum(n, 1))
+    unit = np.where(unit > 0, unit, 1.0)
+    y_unit = y / unit[:, None]
+    # likewise its times, by their rms about the track's middle: the rate is fitted per unit of it
+    period = np.sqrt((t * t).sum(axis=1) / np.maximum(n, 1))
+    period = np.where(period > 0, period, 1.0)
+    t_unit = t / period[:, None]
+
     def amplitudes(w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        c, s_ = np.cos(w[:, None] * t) * weight, np.sin(w[:, None] * t) * weight
+        c, s_ = np.cos(w[:, None] * t_unit) * weight, np.sin(w[:, None] * t_unit) * weight
         cc, ss, cs = (c * c).sum(1), (s_ * s_).sum(1), (c * s_).sum(1)
-        cy, sy = (c * y).sum(1), (s_ * y).sum(1)
+        cy, sy = (c * y_unit).sum(1), (s_ * y_unit).sum(1)
         det = cc * ss - cs * cs
         det = np.where(np.abs(det) > 1e-300, det, 1e-300)
         a, b = (ss * cy - cs * sy) / det, (cc * sy - cs * cy) / det
-        rss = ((y - a[:, None] * c - b[:, None] * s_) ** 2).sum(1)
+        rss = ((y_unit - a[:, None] * c - b[:, None] * s_) ** 2).sum(1)
         return a, b, rss
 
     # a few trial rates around the first guess guard against a noisy start
+    omega_unit = omega * period
     best_rss = np.full(len(omega), np.inf)
-    best = omega.copy()
+    best = omega_unit.copy()
     for factor in (0.7, 0.85, 1.0, 1.15, 1.3):
-        _, _, rss = amplitudes(omega * factor)
+        _, _, rss = amplitudes(omega_unit * factor)
         better = rss < best_rss
-        best = np.where(better, omega * factor, best)
+        best = np.where(better, omega_unit * factor, best)
         best_rss = np.where(better, rss, best_rss)
     a, b, _ = amplitudes(best)
-    params = _gauss_newton(np.column_stack([a, b, best]), _orthographic(t, weight), y, iterations)
+    params = _gauss_newton(np.column_stack([a, b, best]), _orthographic(t_unit, weight), y_unit, iterations)
+    params[:, :2] *= unit[:, None]  # back to the offsets' units
+    params[:, 2] /= period  # and to rad/s
     scale = 1.0
     model = _orthographic(t, weight)
     target = y
@@ -352,8 +365,12 @@ def _fit_batch(
     jtj = jacobian.transpose(0, 2, 1) @ jacobian
     rss = (residual**2).sum(1)
     with np.errstate(all="ignore"):
-        # a (near-)singular J^T J means omega is not determined by the track: infinite error
-        condition = np.linalg.cond(jtj) if len(jtj) else np.empty(0)
+        # a (near-)singular J^T J means omega is not determined by the track: infinite error.
+        # Its conditioning is judged with the columns scaled to unit length, so that it does not
+        # depend on the units of the positions (the rate's column grows with the amplitude).
+        diagonal = np.sqrt(np.maximum(np.einsum("kii->ki", jtj), 1e-300))
+        scaled = jtj / diagonal[:, :, None] / diagonal[:, None, :]
+        condition = np.linalg.cond(scaled) if len(jtj) else np.empty(0)
         safe = np.where((condition < 1e12)[:, None, None], jtj, np.eye(3))
         inverse_22 = np.where(condition < 1e12, np.linalg.inv(safe)[:, 2, 2], np.inf)
         se = np.sqrt(np.maximum(inverse_22 * rss / np.maximum(n - 3, 1), 0.0))

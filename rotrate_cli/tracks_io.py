@@ -38,7 +38,7 @@ def read_tracks(path: str | Path, position_column: str = "x") -> pd.DataFrame:
         raise InputError(f"{path} is not a text table (CSV)")
     try:
         table = pd.read_csv(io.StringIO(text), comment="#", skipinitialspace=True, dtype=str,
-                            keep_default_na=False, quoting=csv.QUOTE_MINIMAL)
+                            keep_default_na=False, quoting=csv.QUOTE_MINIMAL, index_col=False)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, csv.Error, ValueError) as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputError(f"could not read {path} as CSV: {first}") from exc
@@ -60,9 +60,9 @@ def read_tracks(path: str | Path, position_column: str = "x") -> pd.DataFrame:
         values = pd.to_numeric(table[source].str.strip(), errors="coerce")
         bad = values.isna() | ~np.isfinite(values.to_numpy(dtype=float, na_value=np.nan))
         if bad.any():
-            row = int(bad.idxmax()) + 2  # header is line 1 (comments aside)
+            first = int(np.argmax(bad.to_numpy()))  # by position: the index may not be 0..n-1
             raise InputError(f"{path}: column {source!r} has a missing or non-numeric value "
-                             f"({table[source].iloc[int(bad.idxmax())]!r}, data row {row - 1})")
+                             f"({table[source].iloc[first]!r}, data row {first + 1})")
         out[name] = values.astype(float)
     if "time_s" not in out:
         out["time_s"] = np.nan
