@@ -68,6 +68,8 @@ MethodOption = Annotated[str, typer.Option("--method", help="fit (ours: sinusoid
 EveryOption = Annotated[int, typer.Option("--every", help="Use every N-th frame's positions, as the paper did.")]
 DebugOption = Annotated[bool, typer.Option("--debug", help="Show the traceback of an error.")]
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
+SchedulerOption = Annotated[str | None, typer.Option("--scheduler", help="Run the batch on this Dask cluster "
+                                                                         "(tcp://HOST:8786; needs rotrate[dask]).")]
 
 
 def _fail(message: str, code: int) -> typer.Exit:
@@ -175,6 +177,7 @@ def analyze_command(
                                                                   "result is outside --tolerance of it.")] = None,
     tolerance: Annotated[float | None, typer.Option("--tolerance", help="Tolerance of --expect, percent.")] = None,
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Inputs analysed at once (processes).")] = 1,
+    scheduler: SchedulerOption = None,
     output_dir: Annotated[Path | None, typer.Option("--output-dir", help="With several inputs: write each "
                                                                          "one's report here as STEM.json "
                                                                          "(STEM.csv with --format csv).")] = None,
@@ -217,7 +220,9 @@ def analyze_command(
         if len(videos) > 1 or sources != videos:
             if series_csv_path is not None:
                 raise InputError("--series-csv takes one input; with several, --output-dir holds each one's series")
-            return _batch(sources, config, expect, tolerance, jobs, output_dir, fmt, output, force)
+            return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, fmt, output, force)
+        if scheduler is not None:
+            raise InputError("--scheduler is for several inputs (a batch); with one, drop it")
         if output_dir is not None:
             raise InputError("--output-dir is for several inputs; with one, use --output")
         with _progress_bar(quiet) as progress:
@@ -255,7 +260,7 @@ def _detail_paths(sources: list[str], folder: Path, suffix: str) -> list[Path]:
 
 
 def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tolerance: float | None, jobs: int,
-           output_dir: Path | None, fmt: str, output: Path | None, force: bool) -> int:
+           scheduler: str | None, output_dir: Path | None, fmt: str, output: Path | None, force: bool) -> int:
     """Analyse several inputs; one summary row each; the worst input's exit code."""
     details: list[Path] = []
     if output_dir is not None:
@@ -264,7 +269,7 @@ def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tol
         details = _detail_paths(sources, output_dir, ".csv" if fmt == "csv" else ".json")
         for path in details:
             check_output_path(path, force)  # before a long run, not after
-    outcomes = run_batch([Job(source, config, expect, tolerance) for source in sources], jobs)
+    outcomes = run_batch([Job(source, config, expect, tolerance) for source in sources], jobs, scheduler=scheduler)
     for outcome, path in zip(outcomes, details, strict=False):
         if outcome.analysis is not None:
             write_text(path, render(outcome.analysis, "csv" if fmt == "csv" else "json"), force)
@@ -285,6 +290,7 @@ def check_command(
                                                   "method, start, end.")],
     junit: Annotated[Path | None, typer.Option("--junit", help="Also write JUnit XML here, for CI.")] = None,
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Rows analysed at once (processes).")] = 1,
+    scheduler: SchedulerOption = None,
     fmt: FormatOption = "table",
     force: ForceOption = False,
     debug: DebugOption = False,
@@ -296,7 +302,7 @@ def check_command(
         if junit is not None:
             check_output_path(junit, force)
         jobs_list = read_manifest(manifest, AnalysisConfig(fixation_px=None))
-        outcomes = run_batch(jobs_list, jobs)
+        outcomes = run_batch(jobs_list, jobs, scheduler=scheduler)
         expected = [(j.expected_rad_s or math.nan, j.tolerance_pct or 0.0) for j in jobs_list]
         if junit is not None:
             write_text(junit, junit_xml(outcomes, expected, manifest.stem), force)

@@ -161,3 +161,49 @@ def test_inputs_expand_globs_and_folders_of_videos(tmp_path: Path) -> None:
 def test_the_expectation_rule_is_the_point_estimate() -> None:
     assert check_expected(0.605, 0.6, 1) == ""
     assert "+1.67%" in check_expected(0.61, 0.6, 1)
+
+
+def test_ctrl_c_mid_run_exits_130_and_leaves_no_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from rotrate_cli import cli
+
+    def interrupted(*_args: object, **_kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    target = tmp_path / "report.json"
+    monkeypatch.setattr(cli, "analyze", interrupted)
+    result = runner.invoke(app, ["analyze", str(CLIPS[0]), "--fixation", "auto", "-f", "json", "-o", str(target)])
+    assert result.exit_code == 130 and "interrupted" in result.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_while_writing_leaves_neither_half_a_file_nor_a_temporary(tmp_path: Path,
+                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    import os
+
+    def interrupted(*_args: object, **_kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "replace", interrupted)
+    target = tmp_path / "report.csv"
+    result = runner.invoke(app, ["analyze", str(CLIPS[0]), "--fixation", "319.5,179.5", "-f", "csv", "--end", "2",
+                                 "-o", str(target)])
+    assert result.exit_code == 130
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_batch_on_a_local_dask_cluster_gives_the_same_rows(broken: list[Path]) -> None:
+    distributed = pytest.importorskip("dask.distributed", reason="the dask extra is not installed")
+    inputs = [str(CLIPS[0]), str(broken[0])]
+    serial = _batch(*inputs, "--fixation", "auto", "--format", "json")
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        on_dask = _batch(*inputs, "--fixation", "auto", "--format", "json", "--scheduler", cluster.scheduler_address)
+    assert on_dask[0] == serial[0] == 2
+    assert json.loads(on_dask[1]) == json.loads(serial[1])
+
+
+def test_a_bad_scheduler_address_is_one_line() -> None:
+    # (an unreachable one is the same message after the 10 s connection timeout)
+    pytest.importorskip("dask.distributed", reason="the dask extra is not installed")
+    code, _, stderr = _batch(*map(str, CLIPS[:2]), "--fixation", "auto", "--scheduler", "tcp://localhost:port")
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert code == 2 and len(lines) == 1 and "Dask scheduler" in lines[0]

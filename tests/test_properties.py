@@ -82,7 +82,8 @@ def test_omega_is_the_same_either_way_round(seed: int, omega: float) -> None:
     st.text(max_size=400).map(str.encode),
     st.lists(st.tuples(st.integers(-3, 3), st.integers(-2, 5),
                        st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=4))),
-             max_size=12).map(lambda rows: ("track,frame,x\n" + "".join(f"{a},{b},{c}\n" for a, b, c in rows)).encode()),
+             max_size=12).map(lambda rows: ("track,frame,x\n"
+                                            + "".join(f"{a},{b},{c}\n" for a, b, c in rows)).encode()),
 ))
 def test_any_bytes_as_a_tracks_file_give_tracks_or_a_clean_error(tmp_path_factory: pytest.TempPathFactory,
                                                                   data: bytes) -> None:
