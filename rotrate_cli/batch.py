@@ -185,7 +185,8 @@ def _run_on_dask(jobs: Sequence[Job], scheduler: str, done: Callable[[Outcome], 
 
 def summary_frame(outcomes: Sequence[Outcome]) -> pd.DataFrame:
     """One row per input: ``file, status, omega, omega_low, omega_high, rpm, direction,
-    tracks_used, error`` (rad/s; empty where there is no analysis)."""
+    tracks_used, error`` (rad/s; empty where there is no analysis; ``error`` carries the
+    analysis's warnings when it succeeded with one)."""
     rows = []
     for outcome in outcomes:
         a = outcome.analysis
@@ -197,7 +198,8 @@ def summary_frame(outcomes: Sequence[Outcome]) -> pd.DataFrame:
             "rpm": a.rpm if a else math.nan,
             "direction": a.direction if a else "",
             "tracks_used": a.tracks_used if a else 0,
-            "error": outcome.error,
+            # a result with a caveat (a file cut off, say) keeps it in the row
+            "error": outcome.error or "; ".join(f"warning: {w}" for w in (a.warnings if a else ())),
         })
     return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
 

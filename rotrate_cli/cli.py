@@ -231,7 +231,7 @@ def analyze_command(
         if series_csv_path is not None:
             write_text(series_csv_path, series_csv(analysis), force)
         for warning in analysis.warnings:
-            Console(stderr=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
+            Console(stderr=True, soft_wrap=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
         if expect is not None and tolerance is not None:
             miss = check_expected(analysis.omega_rad_s, expect, tolerance)
             if miss:

@@ -207,3 +207,49 @@ def test_a_bad_scheduler_address_is_one_line() -> None:
     code, _, stderr = _batch(*map(str, CLIPS[:2]), "--fixation", "auto", "--scheduler", "tcp://localhost:port")
     lines = [line for line in stderr.splitlines() if line.strip()]
     assert code == 2 and len(lines) == 1 and "Dask scheduler" in lines[0]
+
+
+def test_a_video_cut_off_mid_file_is_measured_and_said_so(tmp_path: Path) -> None:
+    import cv2
+
+    capture = cv2.VideoCapture(str(CLIPS[0]))
+    whole = tmp_path / "whole.avi"
+    writer = cv2.VideoWriter(str(whole), cv2.VideoWriter_fourcc(*"MJPG"), 30, (640, 360))
+    while True:
+        ok, frame = capture.read()
+        if not ok:
+            break
+        writer.write(frame)
+    writer.release()
+    cut = tmp_path / "cut.avi"
+    data = whole.read_bytes()
+    cut.write_bytes(data[: int(len(data) * 0.6)])
+    result = runner.invoke(app, ["analyze", str(cut), "--fixation", "319.5,179.5", "-f", "json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["omega"] == pytest.approx(0.6, rel=0.01)
+    warnings = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(warnings) == 1 and "cut off" in warnings[0]
+
+
+def test_every_track_rejected_is_exit_1_with_the_reasons(tmp_path: Path) -> None:
+    tracks = tmp_path / "short.csv"
+    tracks.write_text("track,frame,x\n" + "".join(f"{k},{f},{10 * k + f}\n" for k in range(3) for f in range(3)))
+    result = runner.invoke(app, ["omega", str(tracks), "--fixation", "0", "--fps", "30"])
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.exit_code == 1 and len(lines) == 1 and "short" in lines[0]
+
+
+def test_an_output_folder_that_cannot_be_written(tmp_path: Path) -> None:
+    import os
+
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        if os.access(locked, os.W_OK):
+            pytest.skip("running as a user who can write anywhere (root): permissions cannot be tested")
+        result = runner.invoke(app, ["analyze", str(CLIPS[0]), "--fixation", "auto", "-o", str(locked / "r.json")])
+        lines = [line for line in result.stderr.splitlines() if line.strip()]
+        assert result.exit_code == 2 and len(lines) == 1 and "cannot write" in lines[0]
+    finally:
+        locked.chmod(0o700)
