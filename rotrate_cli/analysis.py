@@ -78,6 +78,8 @@ class AnalysisConfig:
         window_s: also measure omega(t) over a sliding window this long (None: not).
         segment: group the tracks into rigid bodies by rate and axis and measure each (the
             axis of each is found; ``fixation_px`` must be None).
+        keep_tracks: keep the tracked positions in the result (``Analysis.tracks``), for
+            pictures of the measurement; they cost memory in proportion to the clip.
     """
 
     fixation_px: tuple[float, float] | None
@@ -93,6 +95,7 @@ class AnalysisConfig:
     rejection: RejectionConfig = field(default_factory=RejectionConfig)
     window_s: float | None = None
     segment: bool = False
+    keep_tracks: bool = False
 
 
 @dataclass(frozen=True)
@@ -120,6 +123,8 @@ class Analysis:
         series: omega(t) over a sliding window (see :mod:`rotrate_cli.series`), or None.
         bodies: with ``segment``, every rigid body measured, the headline one (most tracks)
             first; None otherwise.
+        tracks: with ``keep_tracks``, the positions ``frame, time_s, track, x_px, y_px``
+            (tracks numbered as the features); None otherwise.
 
     ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
     a long clip's table is large, and most reports do not need it.
@@ -147,6 +152,7 @@ class Analysis:
     axis_angle_found: bool = False
     series: pd.DataFrame | None = None
     bodies: tuple[Body, ...] | None = None
+    tracks: pd.DataFrame | None = None
 
     @property
     def rpm(self) -> float:
@@ -394,6 +400,9 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
                "axis_found": config.fixation_px is None, "axis_angle_found": config.axis_angle_deg is None}
     if config.segment:
         return _segmented(everything, angle, config, size_px, warnings, context)
+    kept = None
+    if config.keep_tracks:  # for pictures of the measurement (an overlay): numbered as the features
+        kept = everything[["frame", "time_s", "track", "x_px", "y_px"]].assign(track=everything["track"] + 1)
     body = _prepare_body(everything, angle, config)
     del everything  # the offsets hold what is needed: a long clip's positions need not stay
     release_free_memory()
@@ -404,7 +413,30 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         series = rate_series(result.offsets, config.window_s,
                              lambda part: rates_from_offsets(part, config.method, config.rejection, camera).combined)
     return _result(result, fixation_px=(float(fixation[0]), float(fixation[1])), method=_method_name(config, camera),
-                   warnings=tuple(warnings), series=series, **context)
+                   warnings=tuple(warnings), series=series, tracks=kept, **context)
+
+
+def running_rate(analysis: Analysis, step_s: float | None = None) -> pd.DataFrame:
+    """The rate as it would have been measured up to each time: ``time_s, omega_rad_s,
+    omega_low_rad_s, omega_high_rad_s, tracks_used`` every ``step_s`` (default: a twentieth of
+    the clip, at least half a second), from the analysis's own offsets and rules. NaN until
+    enough of a turn has been seen."""
+    offsets = analysis.offsets
+    times = offsets["time_s"].to_numpy()
+    first, last = float(times.min()), float(times.max())
+    step = step_s if step_s is not None else max(0.5, (last - first) / 20.0)
+    rows = []
+    method = "paper" if analysis.method == "paper" else "fit"
+    for end in np.arange(first + step, last + step / 2, step):
+        part = offsets[times <= end]
+        try:
+            combined = rates_from_offsets(part, method, analysis.rejection).combined
+        except (ValueError, IndexError):
+            combined = Combined(math.nan, math.nan, math.nan, 0)
+        rows.append((float(min(end, last)), combined.omega_rad_s, combined.omega_low_rad_s,
+                     combined.omega_high_rad_s, combined.tracks_used))
+    return pd.DataFrame(rows, columns=["time_s", "omega_rad_s", "omega_low_rad_s", "omega_high_rad_s",
+                                       "tracks_used"])
 
 
 def _method_name(config: AnalysisConfig, camera: rates.Camera | None) -> str:

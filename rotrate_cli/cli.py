@@ -19,12 +19,13 @@ from pathlib import Path
 from typing import Annotated, TypeVar
 
 import cv2
+import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from rotrate_cli import rates
-from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks
+from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks, running_rate
 from rotrate_cli.batch import (
     Job,
     batch_exit_code,
@@ -34,7 +35,9 @@ from rotrate_cli.batch import (
     read_manifest,
     run_batch,
 )
+from rotrate_cli.decode import FrameSource
 from rotrate_cli.errors import InputError, OutputError, RotrateError
+from rotrate_cli.overlay import draw_axis, draw_grid, frame_at, write_image, write_overlay
 from rotrate_cli.report import (
     FORMATS,
     check_output_path,
@@ -45,6 +48,7 @@ from rotrate_cli.report import (
     render_table,
     series_csv,
     summary_text,
+    with_units,
     write_text,
 )
 from rotrate_cli.synth import PROJECTIONS, SHAPES, SceneConfig, write_clip
@@ -169,6 +173,13 @@ def analyze_command(
                                                                   "window of this many seconds.")] = None,
     series_csv_path: Annotated[Path | None, typer.Option("--series-csv", help="Write omega(t) (needs --window) "
                                                                                "to this CSV file.")] = None,
+    scale: Annotated[float | None, typer.Option("--scale", help="Physical units per pixel: positions and "
+                                                                "derivatives in the reports in those units "
+                                                                "(omega is unchanged).")] = None,
+    unit: Annotated[str | None, typer.Option("--unit", help="The name of --scale's unit (e.g. in, mm).")] = None,
+    overlay: Annotated[Path | None, typer.Option("--overlay", help="Also write a video with the axis, the "
+                                                                    "tracks and the running omega drawn on it "
+                                                                    "(.mp4).")] = None,
     segment: Annotated[bool, typer.Option("--segment", help="Several objects: group the points into rigid "
                                                             "bodies by rate and axis and report each.")] = False,
     blur: Annotated[float | None, typer.Option("--blur", help="Blur (sigma, px) before tracking; default 1 "
@@ -214,12 +225,16 @@ def analyze_command(
             check_output_path(series_csv_path, force)
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
                                 axis_angle_deg=axis_angle, window_s=window, start_s=start, end_s=end, every=every,
-                                method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker, segment=segment)
+                                method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker, segment=segment,
+                                keep_tracks=overlay is not None)
+        if overlay is not None:
+            check_output_path(overlay, force)
         check_expectation(expect, tolerance)
+        units = _units(scale, unit)
         sources = expand_inputs(videos)
         if len(videos) > 1 or sources != videos:
-            if series_csv_path is not None:
-                raise InputError("--series-csv takes one input; with several, --output-dir holds each one's series")
+            if series_csv_path is not None or overlay is not None:
+                raise InputError("--series-csv and --overlay take one input; with several, use --output-dir")
             return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, fmt, output, force)
         if scheduler is not None:
             raise InputError("--scheduler is for several inputs (a batch); with one, drop it")
@@ -227,9 +242,11 @@ def analyze_command(
             raise InputError("--output-dir is for several inputs; with one, use --output")
         with _progress_bar(quiet) as progress:
             analysis = analyze(sources[0], config, progress)
-        _emit(analysis, fmt, output, force)
+        _emit(analysis if units is None else with_units(analysis, *units), fmt, output, force)
         if series_csv_path is not None:
             write_text(series_csv_path, series_csv(analysis), force)
+        if overlay is not None:
+            _write_overlay(sources[0], fps, start, end, analysis, overlay, force)
         for warning in analysis.warnings:
             Console(stderr=True, soft_wrap=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
         if expect is not None and tolerance is not None:
@@ -241,6 +258,40 @@ def analyze_command(
     code = _run(debug, job)
     if code:
         raise typer.Exit(code)
+
+
+def _units(scale: float | None, unit: str | None) -> tuple[float, str] | None:
+    """``(units per pixel, unit name)`` from --scale/--unit, or None."""
+    if scale is None:
+        if unit is not None:
+            raise InputError("--unit names the unit of --scale; give --scale UNITS_PER_PX too")
+        return None
+    if not (math.isfinite(scale) and scale > 0):
+        raise InputError("--scale takes the physical size of one pixel, a positive number (e.g. 0.02)")
+    name = (unit or "units").strip()
+    if not name or not all(c.isalnum() or c in "_-" for c in name):
+        raise InputError("--unit takes a short name of letters and digits, such as in or mm")
+    return scale, name
+
+
+def _write_overlay(source: str, fps: float | None, start: float, end: float | None, analysis: Analysis,
+                   path: Path, force: bool) -> None:
+    """The overlay video of a finished analysis (see :func:`rotrate_cli.overlay.write_overlay`)."""
+    running = running_rate(analysis)
+    times = running["time_s"].to_numpy()
+
+    def at(time_s: float) -> tuple[float, float, float]:
+        index = int(np.searchsorted(times, time_s + 1e-9, side="right")) - 1
+        if index < 0:
+            return math.nan, math.nan, math.nan
+        row = running.iloc[index]
+        return float(row.omega_rad_s), float(row.omega_low_rad_s), float(row.omega_high_rad_s)
+
+    features = analysis.features
+    inliers = set(features.loc[features["inlier"], "track"].astype(int))
+    assert analysis.tracks is not None  # noqa: S101 - asked for with keep_tracks
+    write_overlay(FrameSource(source, fps=fps), path, analysis.tracks, inliers, analysis.fixation_px,
+                  analysis.axis_angle_deg, at, start, end, force)
 
 
 def _wide_console() -> Console:
@@ -313,6 +364,43 @@ def check_command(
         failed = sum(o.status != "ok" for o in outcomes)
         if failed:
             raise _fail(f"{failed} of {len(outcomes)} manifest rows failed", 1)
+        return 0
+
+    _run(debug, job)
+
+
+@app.command("frame")
+def frame_command(
+    video: Annotated[str, typer.Argument(help="Video file, image folder, or printf pattern.")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="The still to write (.png).")],
+    at: Annotated[float, typer.Option("--at", help="Time of the frame, s.")] = 0.0,
+    fps: Annotated[float | None, typer.Option("--fps", help="Frame rate; required for image sequences.")] = None,
+    grid: Annotated[int, typer.Option("--grid", help="Grid spacing, px.")] = 50,
+    force: ForceOption = False,
+    debug: DebugOption = False,
+) -> None:
+    """Write one frame with a pixel grid and, where it can be found, the rotation axis: read
+    --fixation X,Y off it."""
+
+    def job() -> int:
+        if not 5 <= grid <= 10_000:
+            raise InputError("--grid takes a spacing in pixels, 5 or more")
+        source = FrameSource(video, fps=fps)
+        frame = frame_at(source, at)
+        image = draw_grid(frame.image, grid)
+        try:  # the axis from the motion around that time
+            analysis = analyze(video, AnalysisConfig(fixation_px=None, fps=fps, start_s=max(0.0, at - 3.0),
+                                                     end_s=at + 3.0))
+        except RotrateError as exc:
+            message = f"no axis found ({exc}); read --fixation X,Y off the grid"
+        else:
+            x, y = analysis.fixation_px
+            draw_axis(image, (x, y), analysis.axis_angle_deg, f"{x:.1f},{y:.1f}")
+            message = (f"axis found through {x:.1f},{y:.1f} ({analysis.axis_angle_deg:+.1f} deg from vertical; "
+                       f"omega {analysis.omega_rad_s:.4f} rad/s): try --fixation {x:.1f},{y:.1f}")
+        write_image(output, image, force)
+        Console(highlight=False, soft_wrap=True).print(f"wrote {output} (frame {frame.index}, {frame.time_s:.3f} s); "
+                                                       f"{message}", markup=False)
         return 0
 
     _run(debug, job)

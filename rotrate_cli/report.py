@@ -13,6 +13,7 @@ import math
 import os
 import tempfile
 from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
@@ -140,7 +141,8 @@ def render_table(analysis: Analysis, console: Console) -> None:
     summary.add_row("95% interval", f"{interval} rad/s")
     summary.add_row("direction", analysis.direction)
     fx, fy = analysis.fixation_px
-    summary.add_row("fixation", f"{fx:.1f}" + ("" if math.isnan(fy) else f", {fy:.1f}") + f" {analysis.position_unit}"
+    summary.add_row("fixation", f"{fx:.1f}" + ("" if math.isnan(fy) else f", {fy:.1f}")
+                    + (f" {analysis.position_unit}" if math.isnan(fy) else " px")
                     + ("  (found from the tracks)" if analysis.axis_found else ""))
     if not math.isnan(fy):
         summary.add_row("axis", f"{analysis.axis_angle_deg:+.2f} deg from vertical (top end "
@@ -183,6 +185,18 @@ def render_table(analysis: Analysis, console: Console) -> None:
     console.print(rows)
     if len(features) > TABLE_ROWS:
         console.print(f"... {len(features) - TABLE_ROWS} more features (all of them with --format csv or json)")
+
+
+def with_units(analysis: Analysis, units_per_px: float, unit: str) -> Analysis:
+    """The analysis with its offsets (and so the Table I columns ``y``, ``dy_dt``, ``d2y_dt2``)
+    and per-feature lengths in physical units, as the paper's inches; rates are unchanged (the
+    scale is applied to the results, after the measurement, so no pixel threshold moves)."""
+    features = analysis.features.copy()
+    for column in ("range", "rms_residual", "amplitude"):
+        if column in features:
+            features[column] = features[column] * units_per_px
+    offsets = analysis.offsets.assign(offset_px=analysis.offsets["offset_px"] * units_per_px)
+    return replace(analysis, offsets=offsets, features=features, position_unit=unit)
 
 
 def render(analysis: Analysis, fmt: str) -> str:

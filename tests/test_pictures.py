@@ -1,0 +1,122 @@
+"""Seeing and steering (issue 6): the fixation-picking still, the overlay video, physical units."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from rotrate_cli.cli import app
+from rotrate_cli.decode import FrameSource
+from tests.conftest import SAMPLES, truth_of
+
+runner = CliRunner()
+BOX = SAMPLES / "box_ortho.mp4"
+ROLLED = SAMPLES / "box_roll10.mp4"
+
+
+def test_frame_writes_a_still_with_a_grid_and_names_the_axis(tmp_path: Path) -> None:
+    still = tmp_path / "frame.png"
+    result = runner.invoke(app, ["frame", str(ROLLED), "--at", "2", "-o", str(still)])
+    assert result.exit_code == 0, result.output
+    image = cv2.imread(str(still))
+    assert image is not None and image.shape == (360, 640, 3)
+    truth = truth_of(ROLLED)
+    assert "axis found through" in result.stdout and "--fixation" in result.stdout
+    x, y = (float(v) for v in result.stdout.split("--fixation ")[1].split()[0].split(","))
+    # a point on the rolled axis: its offset across the axis from the truth is within 2 px
+    angle = np.radians(truth["axis_angle_deg"])
+    across = (x - truth["fixation_px"][0]) * np.cos(angle) + (y - truth["fixation_px"][1]) * np.sin(angle)
+    assert abs(across) < 2.0
+    # the picture is the frame with grid lines (every 50 px), labels and the axis drawn on it
+    plain = next(iter(FrameSource(ROLLED).frames(start_s=2.0))).image
+    changed = np.abs(image.astype(int) - plain.astype(int)).sum(axis=2) > 20
+    assert changed[:, 100].mean() > 0.9 and changed[100, :].mean() > 0.9  # grid lines
+    assert changed[:, 120].mean() < 0.3  # between them, the frame itself
+
+
+def test_frame_without_an_axis_still_writes_the_grid(tmp_path: Path) -> None:
+    blank = tmp_path / "blank.avi"
+    writer = cv2.VideoWriter(str(blank), cv2.VideoWriter_fourcc(*"MJPG"), 10, (160, 120))
+    for _ in range(20):
+        writer.write(np.full((120, 160, 3), 90, np.uint8))
+    writer.release()
+    still = tmp_path / "blank.png"
+    result = runner.invoke(app, ["frame", str(blank), "-o", str(still)])
+    assert result.exit_code == 0 and "no axis found" in result.stdout
+    assert cv2.imread(str(still)).shape == (120, 160, 3)
+
+
+@pytest.mark.parametrize(("options", "word"), [(["--at", "99"], "ends before"), (["--at", "-1"], "--at"),
+                                               (["--grid", "1"], "--grid")])
+def test_frame_bad_options(tmp_path: Path, options: list[str], word: str) -> None:
+    result = runner.invoke(app, ["frame", str(BOX), "-o", str(tmp_path / "f.png"), *options])
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.exit_code == 2 and len(lines) == 1 and word in lines[0]
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_frame_keeps_an_existing_picture_without_force(tmp_path: Path) -> None:
+    still = tmp_path / "mine.png"
+    still.write_bytes(b"mine")
+    result = runner.invoke(app, ["frame", str(BOX), "-o", str(still)])
+    assert result.exit_code == 2 and still.read_bytes() == b"mine"
+
+
+def test_overlay_video_has_the_clips_frames_and_size(tmp_path: Path) -> None:
+    video = tmp_path / "overlay.mp4"
+    result = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", "--end", "3", "-f", "json", "-q",
+                                 "--overlay", str(video)])
+    assert result.exit_code == 0, result.output
+    capture = cv2.VideoCapture(str(video))
+    frames = []
+    while True:
+        ok, image = capture.read()
+        if not ok:
+            break
+        frames.append(image)
+    assert len(frames) == 91 and frames[0].shape == (360, 640, 3)
+    original = cv2.VideoCapture(str(BOX))
+    for _ in range(60):
+        ok, plain = original.read()
+    # green (used) points drawn on the object by frame 60
+    diff = frames[59].astype(int) - plain.astype(int)
+    greenish = (diff[:, :, 1] > 60) & (diff[:, :, 2] < 0)
+    assert greenish.sum() > 100
+    assert list(tmp_path.iterdir()) == [video]  # no temporary left behind
+
+
+def test_overlay_refuses_to_replace_and_is_for_one_input(tmp_path: Path) -> None:
+    video = tmp_path / "overlay.mp4"
+    video.write_bytes(b"mine")
+    result = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", "--overlay", str(video)])
+    assert result.exit_code == 2 and video.read_bytes() == b"mine"
+    batch = runner.invoke(app, ["analyze", str(BOX), str(ROLLED), "--fixation", "auto", "--overlay",
+                                str(tmp_path / "o.mp4")])
+    assert batch.exit_code == 2 and "--overlay" in batch.stderr
+
+
+def test_scale_and_unit_give_table_one_in_inches_with_omega_unchanged() -> None:
+    base = ["analyze", str(BOX), "--fixation", "319.5,179.5", "--end", "2", "-f", "csv"]
+    pixels = pd.read_csv(io.StringIO(runner.invoke(app, base).stdout))
+    inches = pd.read_csv(io.StringIO(runner.invoke(app, [*base, "--scale", "0.01", "--unit", "in"]).stdout))
+    assert "y_in" in inches.columns and "y_px" in pixels.columns
+    assert np.allclose(inches["y_in"], pixels["y_px"] * 0.01, rtol=1e-5)
+    assert np.allclose(inches["dy_dt"], pixels["dy_dt"] * 0.01, rtol=1e-5, equal_nan=True)
+    assert np.allclose(inches["omega"], pixels["omega"], equal_nan=True)
+    report = json.loads(runner.invoke(app, [*base[:-1], "json", "--scale", "0.01", "--unit", "in"]).stdout)
+    plain = json.loads(runner.invoke(app, [*base[:-1], "json"]).stdout)
+    assert report["omega"] == plain["omega"]
+
+
+@pytest.mark.parametrize("options", [["--scale", "0"], ["--scale", "-1"], ["--unit", "in"],
+                                     ["--scale", "1", "--unit", "a b"]])
+def test_bad_units(options: list[str]) -> None:
+    result = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", *options])
+    assert result.exit_code == 2 and ("--scale" in result.stderr or "--unit" in result.stderr)
