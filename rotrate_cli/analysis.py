@@ -18,6 +18,7 @@ import pandas as pd
 
 from rotrate_cli import axis as axes
 from rotrate_cli import rates
+from rotrate_cli.chosen import TRACKERS, follow_points
 from rotrate_cli.decode import FrameSource, prefetch
 from rotrate_cli.errors import InputError, NoResultError
 from rotrate_cli.joint import joint_fit
@@ -53,6 +54,9 @@ DIRECTIONS = ("ccw", "cw", "unknown")
 #: model error would steer it (the paper's two hand-tracked features: 0.309 joint, 0.334 mean).
 JOINT_MIN_TRACKS = 10
 
+#: Fewer tracks than this do not find the axis's angle from their motion: it is taken as vertical.
+MIN_TRACKS_FOR_ANGLE = 10
+
 #: Degrees of freedom given to the typical track noise when moderating each track's own.
 PRIOR_DOF = 10.0
 
@@ -80,6 +84,10 @@ class AnalysisConfig:
             axis of each is found; ``fixation_px`` must be None).
         keep_tracks: keep the tracked positions in the result (``Analysis.tracks``), for
             pictures of the measurement; they cost memory in proportion to the clip.
+        points_px: follow only these points (x, y pixels in the first analysed frame), as
+            features 1..n, instead of finding corners (see :mod:`rotrate_cli.chosen`).
+        tracker_kind: ``klt`` (pyramidal Lucas-Kanade) or ``csrt`` (OpenCV's CSRT; slow per
+            point: chosen points, or a few corners).
     """
 
     fixation_px: tuple[float, float] | None
@@ -96,6 +104,8 @@ class AnalysisConfig:
     window_s: float | None = None
     segment: bool = False
     keep_tracks: bool = False
+    points_px: tuple[tuple[float, float], ...] = ()
+    tracker_kind: str = "klt"
 
 
 @dataclass(frozen=True)
@@ -209,6 +219,8 @@ def _check_config(config: AnalysisConfig) -> None:
     if config.axis_angle_deg is not None and not (math.isfinite(config.axis_angle_deg)
                                                    and -180 <= config.axis_angle_deg <= 180):
         raise InputError("--axis-angle takes degrees between -180 and 180 (0: a vertical axis)")
+    if config.tracker_kind not in TRACKERS:
+        raise InputError(f"--tracker must be one of {', '.join(TRACKERS)}; got {config.tracker_kind!r}")
     if config.segment and config.fixation_px is not None:
         raise InputError("--segment finds each body's axis itself; drop --fixation (or use --fixation auto)")
     if config.segment and config.window_s is not None:
@@ -377,6 +389,9 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     everything = _by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
     angle = config.axis_angle_deg
+    assumed_vertical = False
+    if angle is None and everything["track"].nunique() < MIN_TRACKS_FOR_ANGLE:
+        angle, assumed_vertical = 0.0, True  # a few points' wobble says little about the axis
     if angle is None:
         angle = axes.motion_angle_deg(everything)
         if _across(angle):
@@ -388,7 +403,9 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
             angle = axes.motion_angle_deg(everything)
         angle = angle if math.isfinite(angle) else 0.0
     expected = info.frame_count
-    warnings = []
+    warnings = list(run.notes)
+    if assumed_vertical:
+        warnings.append("too few tracks to find the axis's angle: taken as vertical (give --axis-angle DEG)")
     if expected and config.start_s == 0 and config.end_s is None and count < expected - 1:
         warnings.append(f"decoded {count} of the {expected} frames the file announces; it may be cut off")
 
@@ -397,7 +414,8 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     size_px = (info.width_px, info.height_px)
     context = {"source": str(source), "fps": info.fps, "frames": count, "duration_s": duration_s,
                "rejection": config.rejection, "axis_angle_deg": float(angle),
-               "axis_found": config.fixation_px is None, "axis_angle_found": config.axis_angle_deg is None}
+               "axis_found": config.fixation_px is None,
+               "axis_angle_found": config.axis_angle_deg is None and not assumed_vertical}
     if config.segment:
         return _segmented(everything, angle, config, size_px, warnings, context)
     kept = None
@@ -575,6 +593,9 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
                           transform=lambda image: tracking_image(image, scale, blur, video.luma_levels()))
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
+    if config.points_px or config.tracker_kind != "klt":
+        return follow_points(prefetch(frames), (info.width_px, info.height_px), list(config.points_px),
+                             config.tracker_kind, tracker, notify)
     return track_frames(prefetch(frames), (info.width_px, info.height_px), tracker, notify)
 
 

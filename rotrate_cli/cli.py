@@ -173,6 +173,11 @@ def analyze_command(
                                                                   "window of this many seconds.")] = None,
     series_csv_path: Annotated[Path | None, typer.Option("--series-csv", help="Write omega(t) (needs --window) "
                                                                                "to this CSV file.")] = None,
+    track: Annotated[list[str] | None, typer.Option("--track", help="X,Y of a point to follow (repeat for "
+                                                                     "more): features 1..n, as the paper's "
+                                                                     "hand-tracked ones.")] = None,
+    tracker_kind: Annotated[str | None, typer.Option("--tracker", help="klt or csrt (default: klt; csrt with "
+                                                                       "--track).")] = None,
     scale: Annotated[float | None, typer.Option("--scale", help="Physical units per pixel: positions and "
                                                                 "derivatives in the reports in those units "
                                                                 "(omega is unchanged).")] = None,
@@ -226,7 +231,10 @@ def analyze_command(
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
                                 axis_angle_deg=axis_angle, window_s=window, start_s=start, end_s=end, every=every,
                                 method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker, segment=segment,
-                                keep_tracks=overlay is not None)
+                                keep_tracks=overlay is not None,
+                                points_px=tuple((x, y) for x, y in (_numbers(t, 2, "--track", "320,180")
+                                                                    for t in track or [])),
+                                tracker_kind=tracker_kind or ("csrt" if track else "klt"))
         if overlay is not None:
             check_output_path(overlay, force)
         check_expectation(expect, tolerance)

@@ -428,12 +428,14 @@ class TrackingRun:
         tracks: ``frame, time_s, track, x_px, y_px`` in full-resolution pixels.
         frames: frames consumed.
         first_time_s, last_time_s: times of the first and last frame (NaN when there were none).
+        notes: things the user should know (a chosen point lost, say).
     """
 
     tracks: pd.DataFrame
     frames: int
     first_time_s: float
     last_time_s: float
+    notes: tuple[str, ...] = ()
 
 
 def track_frames(

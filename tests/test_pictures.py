@@ -120,3 +120,44 @@ def test_scale_and_unit_give_table_one_in_inches_with_omega_unchanged() -> None:
 def test_bad_units(options: list[str]) -> None:
     result = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", *options])
     assert result.exit_code == 2 and ("--scale" in result.stderr or "--unit" in result.stderr)
+
+
+PAPER_LIKE_POINTS = ((331.0, 102.0), (237.0, 157.0))  # two strong corners on the box's face at t = 0
+
+
+def test_two_chosen_points_with_csrt_and_klt_give_close_table_one_columns() -> None:
+    from rotrate_cli import AnalysisConfig, analyze
+
+    runs = {kind: analyze(BOX, AnalysisConfig(fixation_px=(319.5, 179.5), points_px=PAPER_LIKE_POINTS,
+                                               tracker_kind=kind, end_s=1.0))
+            for kind in ("csrt", "klt")}
+    both = runs["csrt"].samples.merge(runs["klt"].samples, on=["track", "frame"], suffixes=("_csrt", "_klt"))
+    assert sorted(set(both["track"])) == [1, 2]  # features 1..n, as given
+    assert len(both) >= 55  # both follow both points through the second
+    difference = (both["offset_px_csrt"] - both["offset_px_klt"]).abs()
+    # measured: median 1.9 px, largest 5.7 px (CSRT places whole-pixel boxes and slides a little)
+    assert difference.median() < 3.0 and difference.max() < 8.0
+    for run in runs.values():
+        # two points over a fifth of a radian, like the paper's two (0.31 and 0.57 for 0.327)
+        assert run.omega_rad_s == pytest.approx(0.6, rel=0.15)
+        assert run.tracks_total == 2
+
+
+def test_a_chosen_point_that_is_lost_stops_and_says_so(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["analyze", str(BOX), "--fixation", "319.5,179.5", "--track", "331,102",
+                                 "--track", "237,157", "--track", "30,30", "--tracker", "klt", "-f", "json"])
+    # the third point is on the static background: it cannot be lost, but it does not turn either
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout)
+    assert [f["feature"] for f in report["features"]] == [1, 2, 3]
+    assert report["features"][2]["reason"] == "static"
+    assert any("lost at frame" in w for w in report["warnings"])  # the box's points turn out of view
+
+
+@pytest.mark.parametrize(("options", "word"), [(["--track", "900,10"], "outside"),
+                                               (["--track", "1"], "--track"),
+                                               (["--tracker", "mil"], "--tracker")])
+def test_chosen_point_usage_errors(options: list[str], word: str) -> None:
+    result = runner.invoke(app, ["analyze", str(BOX), "--fixation", "319.5,179.5", *options])
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.exit_code == 2 and len(lines) == 1 and word in lines[0]
