@@ -10,7 +10,7 @@ DINO := ../shared/data/dinosaur
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[dev,dask]'
+	$(BIN)/pip install --quiet -e '.[dev,dask,plot]'
 	touch $(STAMP)
 
 ## demo: measure the bundled sample clip (truth: 0.6 rad/s, ccw)

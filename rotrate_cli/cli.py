@@ -22,7 +22,17 @@ import cv2
 import numpy as np
 import typer
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    ProgressColumn,
+    Task,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.text import Text
 
 from rotrate_cli import rates
 from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks, running_rate
@@ -38,6 +48,7 @@ from rotrate_cli.batch import (
 from rotrate_cli.decode import FrameSource
 from rotrate_cli.errors import InputError, OutputError, RotrateError
 from rotrate_cli.overlay import draw_axis, draw_grid, frame_at, write_image, write_overlay
+from rotrate_cli.plots import write_plot
 from rotrate_cli.report import (
     FORMATS,
     check_output_path,
@@ -131,13 +142,22 @@ def _emit(analysis: Analysis, fmt: str, output: Path | None, force: bool) -> Non
         sys.stdout.flush()
 
 
+class _RateColumn(ProgressColumn):
+    """Frames per second so far."""
+
+    def render(self, task: Task) -> Text:
+        speed = task.finished_speed or task.speed
+        return Text("" if speed is None else f"{speed:.0f} frames/s")
+
+
 @contextmanager
 def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | None]:
     console = Console(stderr=True)
     if quiet or not console.is_terminal:
         yield None
         return
-    columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn())
+    columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), _RateColumn(), TimeElapsedColumn(),
+               TimeRemainingColumn())
     with Progress(*columns, console=console, transient=True) as progress:
         task = progress.add_task("frames", total=None)
 
@@ -182,6 +202,9 @@ def analyze_command(
                                                                 "derivatives in the reports in those units "
                                                                 "(omega is unchanged).")] = None,
     unit: Annotated[str | None, typer.Option("--unit", help="The name of --scale's unit (e.g. in, mm).")] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", help="Also write a picture: tracks against the fit, "
+                                                              "each feature's rate, omega over time (.png; "
+                                                              "needs rotrate[plot]).")] = None,
     overlay: Annotated[Path | None, typer.Option("--overlay", help="Also write a video with the axis, the "
                                                                     "tracks and the running omega drawn on it "
                                                                     "(.mp4).")] = None,
@@ -235,14 +258,15 @@ def analyze_command(
                                 points_px=tuple((x, y) for x, y in (_numbers(t, 2, "--track", "320,180")
                                                                     for t in track or [])),
                                 tracker_kind=tracker_kind or ("csrt" if track else "klt"))
-        if overlay is not None:
-            check_output_path(overlay, force)
+        for picture in (overlay, plot):
+            if picture is not None:
+                check_output_path(picture, force)
         check_expectation(expect, tolerance)
         units = _units(scale, unit)
         sources = expand_inputs(videos)
         if len(videos) > 1 or sources != videos:
-            if series_csv_path is not None or overlay is not None:
-                raise InputError("--series-csv and --overlay take one input; with several, use --output-dir")
+            if series_csv_path is not None or overlay is not None or plot is not None:
+                raise InputError("--series-csv, --overlay and --plot take one input; with several, use --output-dir")
             return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, fmt, output, force)
         if scheduler is not None:
             raise InputError("--scheduler is for several inputs (a batch); with one, drop it")
@@ -255,6 +279,8 @@ def analyze_command(
             write_text(series_csv_path, series_csv(analysis), force)
         if overlay is not None:
             _write_overlay(sources[0], fps, start, end, analysis, overlay, force)
+        if plot is not None:
+            write_plot(analysis if units is None else with_units(analysis, *units), plot, force)
         for warning in analysis.warnings:
             Console(stderr=True, soft_wrap=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
         if expect is not None and tolerance is not None:

@@ -161,3 +161,17 @@ def test_chosen_point_usage_errors(options: list[str], word: str) -> None:
     result = runner.invoke(app, ["analyze", str(BOX), "--fixation", "319.5,179.5", *options])
     lines = [line for line in result.stderr.splitlines() if line.strip()]
     assert result.exit_code == 2 and len(lines) == 1 and word in lines[0]
+
+
+def test_plot_writes_a_readable_picture(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib", reason="the plot extra (matplotlib) is not installed")
+    picture = tmp_path / "plot.png"
+    result = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", "--end", "3", "-q", "-f", "json",
+                                 "--plot", str(picture)])
+    assert result.exit_code == 0, result.output
+    image = cv2.imread(str(picture))
+    assert image is not None and image.shape[:2] == (1100, 1200)
+    assert (image < 200).mean() > 0.02  # axes, dots and text were drawn
+    again = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", "--end", "3", "--plot", str(picture)])
+    assert again.exit_code == 2 and "--force" in again.stderr  # never replaced without --force
+    assert [p.name for p in tmp_path.iterdir()] == ["plot.png"]
