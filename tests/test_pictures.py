@@ -135,7 +135,7 @@ def test_two_chosen_points_with_csrt_and_klt_give_close_table_one_columns() -> N
     assert sorted(set(both["track"])) == [1, 2]  # features 1..n, as given
     assert len(both) >= 55  # both follow both points through the second
     difference = (both["offset_px_csrt"] - both["offset_px_klt"]).abs()
-    # measured: median 1.9 px, largest 5.7 px (CSRT places whole-pixel boxes and slides a little)
+    # measured: median 1.9 px, largest 5.7 px (CSRT places whole-pixel boxes)
     assert difference.median() < 3.0 and difference.max() < 8.0
     for run in runs.values():
         # two points over a fifth of a radian, like the paper's two (0.31 and 0.57 for 0.327)
@@ -175,3 +175,19 @@ def test_plot_writes_a_readable_picture(tmp_path: Path) -> None:
     again = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", "--end", "3", "--plot", str(picture)])
     assert again.exit_code == 2 and "--force" in again.stderr  # never replaced without --force
     assert [p.name for p in tmp_path.iterdir()] == ["plot.png"]
+
+
+def test_csrt_stops_rather_than_drifting() -> None:
+    from rotrate_cli import AnalysisConfig, analyze
+
+    klt = analyze(BOX, AnalysisConfig(fixation_px=(319.5, 179.5), points_px=PAPER_LIKE_POINTS, tracker_kind="klt",
+                                      keep_tracks=True))
+    csrt = analyze(BOX, AnalysisConfig(fixation_px=(319.5, 179.5), points_px=PAPER_LIKE_POINTS,
+                                       tracker_kind="csrt", keep_tracks=True))
+    assert klt.tracks is not None and csrt.tracks is not None
+    both = klt.tracks.merge(csrt.tracks, on=["track", "frame"])
+    assert (both["x_px_x"] - both["x_px_y"]).abs().max() < 8.0  # it stopped instead (measured 6.9 px)
+    assert any("lost at frame" in w for w in csrt.warnings)
+    # CSRT is for chosen points (automatic ones: 60 s and 0.05 rad/s for 0.6 when tried)
+    refused = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", "--tracker", "csrt"])
+    assert refused.exit_code == 2 and "--track" in refused.stderr
