@@ -466,7 +466,7 @@ def _method_name(config: AnalysisConfig, camera: rates.Camera | None) -> str:
 
 
 @dataclass(frozen=True)
-class _Body:
+class _Prepared:
     """One body's tracks reduced to what the rate stages need (see :func:`_prepare_body`).
 
     Attributes:
@@ -482,7 +482,7 @@ class _Body:
     positions: pd.DataFrame | None
 
 
-def _prepare_body(everything: pd.DataFrame, angle: float, config: AnalysisConfig) -> _Body:
+def _prepare_body(everything: pd.DataFrame, angle: float, config: AnalysisConfig) -> _Prepared:
     """The fixation point (given, or found from the tracks) and the offsets from it of one
     body's tracks (``frame, time_s, track, x_px, y_px`` sorted by track then frame). The caller
     can drop the tracks table afterwards: nothing here refers to it.
@@ -506,11 +506,11 @@ def _prepare_body(everything: pd.DataFrame, angle: float, config: AnalysisConfig
     }, copy=False)
     # positions are kept only while the fixation may still move: keep the peak low
     positions = tracks[["x_px", "y_px"]] if config.fixation_px is None else None
-    return _Body(fixation, base, axes.offsets_along(tracks, fixation, angle), positions)
+    return _Prepared(fixation, base, axes.offsets_along(tracks, fixation, angle), positions)
 
 
 def _measure_body(
-    body: _Body, angle: float, config: AnalysisConfig, size_px: tuple[int, int]
+    body: _Prepared, angle: float, config: AnalysisConfig, size_px: tuple[int, int]
 ) -> tuple[tuple[float, float], RateResult, rates.Camera | None]:
     """The rates of one prepared body, with its fixation refined when it was found."""
     fixation = body.fixation_px

@@ -1,5 +1,5 @@
 """Following points the user chose (``--track X,Y``), as the paper followed its two features by
-hand, or a few automatic corners with CSRT (``--tracker csrt``).
+hand.
 
 Two trackers: OpenCV's CSRT (a discriminative correlation filter on a box around each point,
 robust to appearance change, whole-pixel positions) and pyramidal Lucas-Kanade with a
@@ -31,8 +31,6 @@ CSRT_BOX_PX = 31
 #: clip a chosen corner drifted 30 px from where Lucas-Kanade followed it; at 0.1 it stops
 #: (saying so) before it is 7 px off.
 CSRT_PSR_THRESHOLD = 0.1
-#: Corners seeded for ``--tracker csrt`` without chosen points (CSRT is slow per point).
-CSRT_AUTO_POINTS = 40
 
 
 def follow_points(
@@ -44,8 +42,9 @@ def follow_points(
     progress: Callable[[int, float], None] | None = None,
 ) -> TrackingRun:
     """Follow ``points_px`` (full-resolution x, y) through reduced grey ``frames`` with ``kind``
-    (``csrt`` or ``klt``); with no points, the strongest corners of the first frame (in
-    ``config.roi`` if set). ``notes`` of the run say which points were lost where."""
+    (``csrt`` or ``klt``). ``notes`` of the run say which points were lost where."""
+    if not points_px:
+        raise InputError("no point to follow: give --track X,Y")
     if kind not in TRACKERS:
         raise InputError(f"--tracker must be one of {', '.join(TRACKERS)}; got {kind!r}")
     width_px, height_px = frame_size_px
@@ -61,8 +60,6 @@ def follow_points(
     for frame in frames:
         if state is None:
             start = np.array(points_px, np.float32).reshape(-1, 2) * scale
-            if len(start) == 0:
-                start = _corners(frame.image, config, scale)
             state = _Csrt(frame.image, start) if kind == "csrt" else _Klt(frame.image, start, config)
             positions, alive = start, np.ones(len(start), bool)
             first_time_s = frame.time_s
@@ -81,17 +78,6 @@ def follow_points(
     tracks = tracks.astype({"frame": np.int32, "track": np.int32, "x_px": np.float32, "y_px": np.float32})
     return TrackingRun(tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True), count,
                        first_time_s, last_time_s, tuple(notes))
-
-
-def _corners(image: np.ndarray, config: TrackerConfig, scale: float) -> np.ndarray:
-    mask = None
-    if config.roi is not None:
-        mask = np.zeros(image.shape[:2], np.uint8)
-        r = config.roi
-        mask[int(r.y_px * scale):int((r.y_px + r.height_px) * scale), int(r.x_px * scale):int((r.x_px + r.width_px)
-                                                                                          * scale)] = 255
-    corners = cv2.goodFeaturesToTrack(image, CSRT_AUTO_POINTS, 0.05, CSRT_BOX_PX * 0.7, mask=mask, blockSize=7)
-    return np.empty((0, 2), np.float32) if corners is None else corners.reshape(-1, 2).astype(np.float32)
 
 
 class _Csrt:

@@ -413,8 +413,7 @@ def frame_command(
     force: ForceOption = False,
     debug: DebugOption = False,
 ) -> None:
-    """Write one frame with a pixel grid and, where it can be found, the rotation axis: read
-    --fixation X,Y off it."""
+    """Write one frame with a pixel grid and the rotation axis where it is found: read --fixation off it."""
 
     def job() -> int:
         if not 5 <= grid <= 10_000:

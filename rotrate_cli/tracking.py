@@ -247,11 +247,6 @@ class KltTracker:
             "criteria": (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01),
         }
 
-    @property
-    def tracks_started(self) -> int:
-        """How many tracks have been seeded so far."""
-        return self._next_id
-
     def update(self, frame_index: int, time_s: float, grey: np.ndarray) -> None:
         """Track the live points into this frame, drop the bad ones, and seed new ones."""
         if self._prev is not None and len(self._points):
