@@ -277,17 +277,22 @@ class KltTracker:
         # The backward pass starts from the same prediction reversed, independent of the forward
         # answer, so a wrong forward match is not confirmed by starting next to it.
         known = np.any(self._velocity != 0, axis=1)
-        moved = np.empty_like(self._points)
-        status = np.zeros(len(self._points), np.uint8)
-        back = np.empty_like(self._points)
-        status_back = np.zeros(len(self._points), np.uint8)
-        for group, levels in ((known, KNOWN_LEVELS), (~known, self.config.pyramid_levels)):
-            if not group.any():
-                continue
-            points, velocity = self._points[group], self._velocity[group]
-            moved[group], status[group] = self._flow(self._prev, grey, points, points + velocity, levels)
-            back[group], status_back[group] = self._flow(grey, self._prev, moved[group], moved[group] - velocity,
-                                                         levels)
+        if known.all():  # most frames: one pass each way for all points, no regrouping
+            points, velocity = self._points, self._velocity
+            moved, status = self._flow(self._prev, grey, points, points + velocity, KNOWN_LEVELS)
+            back, status_back = self._flow(grey, self._prev, moved, moved - velocity, KNOWN_LEVELS)
+        else:
+            moved = np.empty_like(self._points)
+            status = np.zeros(len(self._points), np.uint8)
+            back = np.empty_like(self._points)
+            status_back = np.zeros(len(self._points), np.uint8)
+            for group, levels in ((known, KNOWN_LEVELS), (~known, self.config.pyramid_levels)):
+                if not group.any():
+                    continue
+                points, velocity = self._points[group], self._velocity[group]
+                moved[group], status[group] = self._flow(self._prev, grey, points, points + velocity, levels)
+                back[group], status_back[group] = self._flow(grey, self._prev, moved[group],
+                                                             moved[group] - velocity, levels)
         round_trip_px = np.linalg.norm(back - self._points, axis=1)
         width, height = self._size
         keep = (
