@@ -47,11 +47,11 @@ from rotrate_cli.batch import (
 )
 from rotrate_cli.decode import FrameSource
 from rotrate_cli.errors import InputError, OutputError, RotrateError
+from rotrate_cli.outputs import check_output_path, write_text
 from rotrate_cli.overlay import draw_axis, draw_grid, frame_at, write_image, write_overlay
 from rotrate_cli.plots import write_plot
 from rotrate_cli.report import (
     FORMATS,
-    check_output_path,
     junit_xml,
     render,
     render_check,
@@ -60,7 +60,6 @@ from rotrate_cli.report import (
     series_csv,
     summary_text,
     with_units,
-    write_text,
 )
 from rotrate_cli.synth import PROJECTIONS, SHAPES, SceneConfig, write_clip
 from rotrate_cli.tracking import Roi, TrackerConfig

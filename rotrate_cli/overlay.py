@@ -8,8 +8,6 @@ a temporary name and a rename, so an interrupted run leaves nothing half-written
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -20,6 +18,7 @@ import pandas as pd
 from rotrate_cli.axis import unit_offset
 from rotrate_cli.decode import Frame, FrameSource
 from rotrate_cli.errors import InputError, OutputError
+from rotrate_cli.outputs import replacing
 
 #: Colours (BGR).
 AXIS_COLOUR = (0, 215, 255)
@@ -88,27 +87,9 @@ def _label(image: np.ndarray, text: str, origin: tuple[int, int], scale: float) 
 
 def write_image(path: Path, image: np.ndarray, force: bool) -> None:
     """Write a PNG (or any format OpenCV knows from the suffix) through a temporary name."""
-    _check_target(path, force)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix or ".png",
-                                         dir=path.parent if str(path.parent) else ".")
-    os.close(handle)
-    try:
-        if not cv2.imwrite(temporary, image):
+    with replacing(path, force, suffix=path.suffix or ".png") as temporary:
+        if not cv2.imwrite(str(temporary), image):
             raise OutputError(f"could not write {path}; use a .png or .jpg name")
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
-
-
-def _check_target(path: Path, force: bool) -> None:
-    if path.is_dir():
-        raise OutputError(f"{path} is a folder; give a file name")
-    if path.exists() and not force:
-        raise OutputError(f"{path} exists; pass --force to replace it")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise OutputError(f"the folder {parent} does not exist")
 
 
 def write_overlay(
@@ -130,57 +111,59 @@ def write_overlay(
     ``tracks`` has ``track, frame, x_px, y_px`` (features numbered as in the report). Returns
     the number of frames written.
     """
-    _check_target(path, force)
+    info = source.info
+    fourcc = cv2.VideoWriter_fourcc(*("mp4v" if path.suffix.lower() in {".mp4", ".mov", ".mkv", ""} else "MJPG"))
+    with replacing(path, force, suffix=path.suffix or ".mp4") as temporary:
+        writer = cv2.VideoWriter(str(temporary), fourcc, info.fps, (info.width_px, info.height_px))
+        if not writer.isOpened():
+            raise OutputError(f"could not open a video writer for {path}; use a .mp4 or .avi name")
+        try:
+            return _draw_frames(source, writer, tracks, inliers, point_px, angle_deg, running, start_s, end_s)
+        finally:
+            writer.release()
+
+
+def _draw_frames(
+    source: FrameSource, writer: cv2.VideoWriter, tracks: pd.DataFrame, inliers: set[int],
+    point_px: tuple[float, float], angle_deg: float, running: Callable[[float], tuple[float, float, float]],
+    start_s: float, end_s: float | None,
+) -> int:
+    """Draw and write the overlay's frames (see :func:`write_overlay`); returns how many."""
     info = source.info
     by_frame = {int(frame): part for frame, part in tracks.groupby("frame", sort=False)}
     history: dict[int, list[tuple[float, int, int]]] = {}
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix or ".mp4",
-                                         dir=path.parent if str(path.parent) else ".")
-    os.close(handle)
-    fourcc = cv2.VideoWriter_fourcc(*("mp4v" if path.suffix.lower() in {".mp4", ".mov", ".mkv", ""} else "MJPG"))
-    writer = cv2.VideoWriter(temporary, fourcc, info.fps, (info.width_px, info.height_px))
-    if not writer.isOpened():
-        Path(temporary).unlink(missing_ok=True)
-        raise OutputError(f"could not open a video writer for {path}; use a .mp4 or .avi name")
     written = 0
     scale = max(0.45, min(info.width_px, info.height_px) / 800)
-    try:
-        for frame in source.frames(start_s, end_s):
-            image = frame.image
-            draw_axis(image, point_px, angle_deg)
-            here = by_frame.get(frame.index)
-            if here is not None:
-                for track, x, y in zip(here["track"].to_numpy(), here["x_px"].to_numpy(), here["y_px"].to_numpy(),
-                                       strict=True):
-                    history.setdefault(int(track), []).append((frame.time_s, int(round(x)), int(round(y))))
-            for track, trail in list(history.items()):
-                while trail and frame.time_s - trail[0][0] > TRAIL_S:
-                    trail.pop(0)
-                if not trail:
-                    del history[track]
-                    continue
-                if trail[-1][0] < frame.time_s - 1e-9:
-                    continue  # the track has ended: its trail is no longer drawn
-                colour = INLIER_COLOUR if track in inliers else REJECTED_COLOUR
-                points = np.array([(x, y) for _, x, y in trail], np.int32)
-                if len(points) > 1:
-                    cv2.polylines(image, [points], False, colour, 1, cv2.LINE_AA)
-                cv2.circle(image, (int(points[-1][0]), int(points[-1][1])), 2, colour, -1, cv2.LINE_AA)
-            omega, low, high = running(frame.time_s)
-            text = (f"omega {omega:.4f} rad/s [{low:.4f}, {high:.4f}]  t {frame.time_s:.2f} s"
-                    if math.isfinite(omega) else f"omega: not yet  t {frame.time_s:.2f} s")
-            # on a dark band: the codec then keeps the changing text sharp
-            cv2.rectangle(image, (0, 0), (image.shape[1] - 1, int(42 * scale)), (0, 0, 0), -1)
-            _label(image, text, (10, int(30 * scale)), scale)
-            _legend(image, scale)
-            writer.write(image)
-            written += 1
-    except BaseException:
-        writer.release()
-        Path(temporary).unlink(missing_ok=True)
-        raise
-    writer.release()
-    os.replace(temporary, path)
+    for frame in source.frames(start_s, end_s):
+        image = frame.image
+        draw_axis(image, point_px, angle_deg)
+        here = by_frame.get(frame.index)
+        if here is not None:
+            for track, x, y in zip(here["track"].to_numpy(), here["x_px"].to_numpy(), here["y_px"].to_numpy(),
+                                   strict=True):
+                history.setdefault(int(track), []).append((frame.time_s, int(round(x)), int(round(y))))
+        for track, trail in list(history.items()):
+            while trail and frame.time_s - trail[0][0] > TRAIL_S:
+                trail.pop(0)
+            if not trail:
+                del history[track]
+                continue
+            if trail[-1][0] < frame.time_s - 1e-9:
+                continue  # the track has ended: its trail is no longer drawn
+            colour = INLIER_COLOUR if track in inliers else REJECTED_COLOUR
+            points = np.array([(x, y) for _, x, y in trail], np.int32)
+            if len(points) > 1:
+                cv2.polylines(image, [points], False, colour, 1, cv2.LINE_AA)
+            cv2.circle(image, (int(points[-1][0]), int(points[-1][1])), 2, colour, -1, cv2.LINE_AA)
+        omega, low, high = running(frame.time_s)
+        text = (f"omega {omega:.4f} rad/s [{low:.4f}, {high:.4f}]  t {frame.time_s:.2f} s"
+                if math.isfinite(omega) else f"omega: not yet  t {frame.time_s:.2f} s")
+        # on a dark band: the codec then keeps the changing text sharp
+        cv2.rectangle(image, (0, 0), (image.shape[1] - 1, int(42 * scale)), (0, 0, 0), -1)
+        _label(image, text, (10, int(30 * scale)), scale)
+        _legend(image, scale)
+        writer.write(image)
+        written += 1
     return written
 
 

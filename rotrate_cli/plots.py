@@ -8,8 +8,6 @@ here and only when a plot is asked for. The file is written through a temporary 
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -17,7 +15,8 @@ import numpy as np
 import pandas as pd
 
 from rotrate_cli.analysis import Analysis, running_rate
-from rotrate_cli.errors import InputError, OutputError
+from rotrate_cli.errors import InputError
+from rotrate_cli.outputs import check_output_path, replacing
 from rotrate_cli.rates import solve_two_columns
 
 if TYPE_CHECKING:
@@ -43,13 +42,7 @@ def write_plot(analysis: Analysis, path: Path, force: bool = False) -> None:
         from matplotlib import pyplot
     except ImportError:
         raise InputError("--plot needs matplotlib: pip install 'rotrate[plot]'") from None
-    if path.is_dir():
-        raise OutputError(f"{path} is a folder; give a file name for --plot")
-    if path.exists() and not force:
-        raise OutputError(f"{path} exists; pass --force to replace it")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise OutputError(f"the folder {parent} does not exist")
+    check_output_path(path, force)  # before drawing, not after
 
     dpi = 100
     figure, (top, middle, bottom) = pyplot.subplots(3, 1, figsize=(SIZE_PX[0] / dpi, SIZE_PX[1] / dpi), dpi=dpi,
@@ -62,14 +55,9 @@ def write_plot(analysis: Analysis, path: Path, force: bool = False) -> None:
                     f"[{analysis.omega_low_rad_s:.4f}, {analysis.omega_high_rad_s:.4f}] ({analysis.rpm:.2f} rpm), "
                     f"{analysis.direction}", fontsize=12)
     figure.tight_layout()
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix or ".png", dir=parent)
-    os.close(handle)
     try:
-        figure.savefig(temporary, dpi=dpi)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+        with replacing(path, force, suffix=path.suffix or ".png") as temporary:
+            figure.savefig(temporary, dpi=dpi)
     finally:
         pyplot.close(figure)
 

@@ -10,11 +10,8 @@ from __future__ import annotations
 import io
 import json
 import math
-import os
-import tempfile
 from collections import Counter
 from dataclasses import replace
-from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
@@ -24,7 +21,6 @@ from rich.table import Table
 
 from rotrate_cli.analysis import Analysis
 from rotrate_cli.batch import Outcome, summary_frame
-from rotrate_cli.errors import OutputError
 
 FORMATS = ("table", "csv", "json")
 TABLE_ROWS = 25  # features listed in the terminal table; the CSV and JSON have them all
@@ -208,33 +204,6 @@ def render(analysis: Analysis, fmt: str) -> str:
     buffer = io.StringIO()
     render_table(analysis, Console(file=buffer, width=110, color_system=None, force_terminal=False))
     return buffer.getvalue()
-
-
-def check_output_path(path: Path, force: bool) -> None:
-    """Raise OutputError unless ``path`` can be written (and may be replaced)."""
-    if path.is_dir():
-        raise OutputError(f"{path} is a folder; give a file name for --output")
-    if path.exists() and not force:
-        raise OutputError(f"{path} exists; pass --force to replace it")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise OutputError(f"the folder {parent} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise OutputError(f"cannot write into the folder {parent}")
-
-
-def write_text(path: Path, text: str, force: bool) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename: never half a file."""
-    check_output_path(path, force)
-    parent = path.parent if str(path.parent) else Path(".")
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=parent)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
 
 
 def summary_text(outcomes: list[Outcome], fmt: str) -> str:
