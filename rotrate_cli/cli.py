@@ -101,6 +101,10 @@ def _run(debug: bool, job: Callable[[], T]) -> T:
         raise _fail(str(exc), exc.exit_code) from None
     except KeyboardInterrupt:
         raise _fail("interrupted", 130) from None
+    except BrokenPipeError:
+        # the reader of stdout stopped early (| head): nothing to say; keep Python's exit flush quiet
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        raise typer.Exit(0) from None
     except typer.Exit:
         raise
     except Exception as exc:  # noqa: BLE001 - the user gets one line, the developer --debug
@@ -273,13 +277,14 @@ def analyze_command(
             raise InputError("--output-dir is for several inputs; with one, use --output")
         with _progress_bar(quiet) as progress:
             analysis = analyze(sources[0], config, progress)
-        _emit(analysis if units is None else with_units(analysis, *units), fmt, output, force)
+        # the files first, the report on stdout last: a reader that stops early (| head) costs no file
         if series_csv_path is not None:
             write_text(series_csv_path, series_csv(analysis), force)
         if overlay is not None:
             _write_overlay(sources[0], fps, start, end, analysis, overlay, force)
         if plot is not None:
             write_plot(analysis if units is None else with_units(analysis, *units), plot, force)
+        _emit(analysis if units is None else with_units(analysis, *units), fmt, output, force)
         for warning in analysis.warnings:
             Console(stderr=True, soft_wrap=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
         if expect is not None and tolerance is not None:

@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from rotrate_cli.cli import app
-from tests.conftest import SAMPLES
+from tests.conftest import ROOT, SAMPLES
 
 runner = CliRunner()
 CLIP = SAMPLES / "box_ortho.mp4"
@@ -173,3 +173,15 @@ def test_native_decoder_noise_stays_off_the_terminal(tmp_path: Path) -> None:
     assert completed.stderr.splitlines() == [
         f"rotrate: error: could not open {fake} as a video; is it a video file (mp4, mov, avi, mkv)?"
     ]
+
+
+def test_a_reader_that_stops_early_costs_no_file_and_no_error(tmp_path: Path) -> None:
+    # `rotrate analyze ... -f csv | head -1`: the other outputs are written first, and the broken
+    # pipe ends the run quietly
+    series = tmp_path / "series.csv"
+    command = (f"{sys.executable} -m rotrate_cli analyze {CLIP} --fixation 319.5,179.5 --end 3 -f csv "
+               f"--window 1 --series-csv {series} | head -1")
+    done = subprocess.run(["bash", "-o", "pipefail", "-c", command], capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("feature,frame") and done.stderr == ""
+    assert series.read_text().startswith("time_s,")
