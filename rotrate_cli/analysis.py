@@ -19,6 +19,7 @@ import pandas as pd
 from rotrate_cli import axis as axes
 from rotrate_cli import rates
 from rotrate_cli.chosen import TRACKERS, follow_points
+from rotrate_cli.csrt import CsrtTracker, csrt_settings
 from rotrate_cli.decode import FrameSource, prefetch
 from rotrate_cli.errors import InputError, NoResultError
 from rotrate_cli.joint import joint_fit
@@ -86,8 +87,9 @@ class AnalysisConfig:
             pictures of the measurement; they cost memory in proportion to the clip.
         points_px: follow only these points (x, y pixels in the first analysed frame), as
             features 1..n, instead of finding corners (see :mod:`rotrate_cli.chosen`).
-        tracker_kind: ``klt`` (pyramidal Lucas-Kanade) or ``csrt`` (OpenCV's CSRT; slow per
-            point: chosen points, or a few corners).
+        tracker_kind: ``klt`` (pyramidal Lucas-Kanade) or ``csrt`` (OpenCV's CSRT: for chosen
+            points, or for 30 automatic corners placed to sub-pixel, see :mod:`rotrate_cli.csrt`;
+            about 5x slower than ``klt``, and for videos, not stills far apart).
     """
 
     fixation_px: tuple[float, float] | None
@@ -221,10 +223,6 @@ def _check_config(config: AnalysisConfig) -> None:
         raise InputError("--axis-angle takes degrees between -180 and 180 (0: a vertical axis)")
     if config.tracker_kind not in TRACKERS:
         raise InputError(f"--tracker must be one of {', '.join(TRACKERS)}; got {config.tracker_kind!r}")
-    if config.tracker_kind == "csrt" and not config.points_px:
-        # measured on the box clip: 40 corners took 60 s and gave 0.05 rad/s for 0.6 (corners on the
-        # background and CSRT's whole-pixel boxes); the automatic points are Lucas-Kanade's job
-        raise InputError("--tracker csrt follows chosen points: give --track X,Y (automatic points use klt)")
     if config.segment and config.fixation_px is not None:
         raise InputError("--segment finds each body's axis itself; drop --fixation (or use --fixation auto)")
     if config.segment and config.window_s is not None:
@@ -363,6 +361,16 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         NoResultError: the video was read but no track gave a trustworthy rate.
     """
     _check_config(config)
+    try:
+        return _analyze(source, config, progress)
+    except NoResultError as error:
+        if config.tracker_kind == "csrt" and not config.points_px:
+            raise NoResultError(f"{error}; CSRT loses points that jump far between frames (stills taken "
+                                "far apart, fast turns): the default --tracker klt follows those") from error
+        raise
+
+
+def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None) -> Analysis:
     video = FrameSource(source, fps=config.fps)
     info = video.info
     if config.fixation_px is not None:
@@ -597,10 +605,12 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
                           transform=lambda image: tracking_image(image, scale, blur, video.luma_levels()))
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
-    if config.points_px or config.tracker_kind != "klt":
-        return follow_points(prefetch(frames), (info.width_px, info.height_px), list(config.points_px),
-                             config.tracker_kind, tracker, notify)
-    return track_frames(prefetch(frames), (info.width_px, info.height_px), tracker, notify)
+    size_px = (info.width_px, info.height_px)
+    if config.points_px:
+        return follow_points(prefetch(frames), size_px, list(config.points_px), config.tracker_kind, tracker, notify)
+    if config.tracker_kind == "csrt":
+        return track_frames(prefetch(frames), size_px, csrt_settings(tracker), notify, kind=CsrtTracker)
+    return track_frames(prefetch(frames), size_px, tracker, notify)
 
 
 def _refine_fixation(

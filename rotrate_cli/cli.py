@@ -200,7 +200,9 @@ def analyze_command(
                                                                      "more): features 1..n, as the paper's "
                                                                      "hand-tracked ones.")] = None,
     tracker_kind: Annotated[str | None, typer.Option("--tracker", help="klt or csrt (default: klt; csrt with "
-                                                                       "--track).")] = None,
+                                                                       "--track). Automatic csrt follows 30 "
+                                                                       "corners, about 5x slower; videos only, "
+                                                                       "not stills far apart.")] = None,
     scale: Annotated[float | None, typer.Option("--scale", help="Physical units per pixel: positions and "
                                                                 "derivatives in the reports in those units "
                                                                 "(omega is unchanged).")] = None,

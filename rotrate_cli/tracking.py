@@ -213,8 +213,11 @@ class _Tracks:
                             copy=False)  # pandas copies dict input by default: twice the memory of a long clip
 
 
-class KltTracker:
-    """Follows many corners through a stream of reduced grey frames.
+class CornerTracker:
+    """Follows many corners through a stream of reduced grey frames: seeds corners on the moving
+    object, drops points that stay put or reach the outline, and stores the positions. How a
+    point moves from one frame to the next is the subclass's :meth:`_move` (Lucas-Kanade in
+    :class:`KltTracker`, CSRT in :class:`rotrate_cli.csrt.CsrtTracker`).
 
     Feed frames in order with :meth:`update`, then read :meth:`tracks`.
     """
@@ -245,11 +248,6 @@ class KltTracker:
         self._anchor_time = np.empty(0, np.float64)
         self._next_id = 0
         self._count = 0
-        lk_window = (config.win_width_px, config.win_height_px)
-        self._lk = {
-            "winSize": lk_window,
-            "maxLevel": config.pyramid_levels,
-        }
 
     def update(self, frame_index: int, time_s: float, grey: np.ndarray) -> None:
         """Track the live points into this frame, drop the bad ones, and seed new ones."""
@@ -265,44 +263,21 @@ class KltTracker:
         self._prev = grey
         self._count += 1
 
-    def _flow(self, source: np.ndarray, target: np.ndarray, points: np.ndarray, guess: np.ndarray,
-              levels: int, backward: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        if len(points) == 0:
-            return np.empty((0, 2), np.float32), np.empty(0, np.uint8)
-        lk = dict(self._lk, maxLevel=levels, criteria=BACKWARD_CRITERIA if backward else FORWARD_CRITERIA)
-        moved, status, _ = cv2.calcOpticalFlowPyrLK(source, target, points.reshape(-1, 1, 2),
-                                                    guess.reshape(-1, 1, 2).copy(),
-                                                    flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **lk)
-        return moved.reshape(-1, 2), status.ravel()
+    def _move(self, grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where each live point went in ``grey`` (n x 2, tracking-image pixels) and whether it was
+        followed (n booleans). ``self._prev`` is the previous frame; ``self._velocity`` each
+        point's last step."""
+        raise NotImplementedError
+
+    def _seeded(self, grey: np.ndarray, corners: np.ndarray, ids: np.ndarray) -> np.ndarray:
+        """Called with the corners about to be followed from ``grey``; returns which to keep."""
+        return np.ones(len(corners), bool)
 
     def _advance(self, grey: np.ndarray) -> None:
-        # Points with a known velocity start from a constant-velocity prediction, close to the
-        # answer, so one pyramid level above the base suffices; new points search the full pyramid.
-        # The backward pass starts from the same prediction reversed, independent of the forward
-        # answer, so a wrong forward match is not confirmed by starting next to it.
-        known = np.any(self._velocity != 0, axis=1)
-        if known.all():  # most frames: one pass each way for all points, no regrouping
-            points, velocity = self._points, self._velocity
-            moved, status = self._flow(self._prev, grey, points, points + velocity, KNOWN_LEVELS)
-            back, status_back = self._flow(grey, self._prev, moved, moved - velocity, KNOWN_LEVELS, backward=True)
-        else:
-            moved = np.empty_like(self._points)
-            status = np.zeros(len(self._points), np.uint8)
-            back = np.empty_like(self._points)
-            status_back = np.zeros(len(self._points), np.uint8)
-            for group, levels in ((known, KNOWN_LEVELS), (~known, self.config.pyramid_levels)):
-                if not group.any():
-                    continue
-                points, velocity = self._points[group], self._velocity[group]
-                moved[group], status[group] = self._flow(self._prev, grey, points, points + velocity, levels)
-                back[group], status_back[group] = self._flow(grey, self._prev, moved[group],
-                                                             moved[group] - velocity, levels, backward=True)
-        round_trip_px = np.linalg.norm(back - self._points, axis=1)
+        moved, keep = self._move(grey)
         width, height = self._size
         keep = (
-            (status == 1)
-            & (status_back == 1)
-            & (round_trip_px < self.config.fb_max_error_px)
+            keep
             & (moved[:, 0] >= 0)
             & (moved[:, 1] >= 0)
             & (moved[:, 0] <= width - 1)
@@ -412,6 +387,8 @@ class KltTracker:
         ).reshape(-1, 2)
         new_ids = np.arange(self._next_id, self._next_id + len(corners), dtype=np.int32)
         self._next_id += len(corners)
+        usable = self._seeded(grey, corners, new_ids)
+        corners, new_ids = corners[usable], new_ids[usable]
         self._points = np.vstack([self._points, corners])
         self._ids = np.concatenate([self._ids, new_ids])
         self._velocity = np.vstack([self._velocity, np.zeros_like(corners)])
@@ -423,6 +400,50 @@ class KltTracker:
 
         Call once, at the end: the store is handed over, not copied."""
         return self._store.frame(self.scale)
+
+
+class KltTracker(CornerTracker):
+    """Corners followed by pyramidal Lucas-Kanade, forward and back (see the module's notes)."""
+
+    def __init__(self, frame_size_px: tuple[int, int], config: TrackerConfig) -> None:
+        super().__init__(frame_size_px, config)
+        self._lk = {"winSize": (config.win_width_px, config.win_height_px), "maxLevel": config.pyramid_levels}
+
+    def _flow(self, source: np.ndarray, target: np.ndarray, points: np.ndarray, guess: np.ndarray,
+              levels: int, backward: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        if len(points) == 0:
+            return np.empty((0, 2), np.float32), np.empty(0, np.uint8)
+        lk = dict(self._lk, maxLevel=levels, criteria=BACKWARD_CRITERIA if backward else FORWARD_CRITERIA)
+        moved, status, _ = cv2.calcOpticalFlowPyrLK(source, target, points.reshape(-1, 1, 2),
+                                                    guess.reshape(-1, 1, 2).copy(),
+                                                    flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **lk)
+        return moved.reshape(-1, 2), status.ravel()
+
+    def _move(self, grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # Points with a known velocity start from a constant-velocity prediction, close to the
+        # answer, so one pyramid level above the base suffices; new points search the full pyramid.
+        # The backward pass starts from the same prediction reversed, independent of the forward
+        # answer, so a wrong forward match is not confirmed by starting next to it.
+        known = np.any(self._velocity != 0, axis=1)
+        if known.all():  # most frames: one pass each way for all points, no regrouping
+            points, velocity = self._points, self._velocity
+            moved, status = self._flow(self._prev, grey, points, points + velocity, KNOWN_LEVELS)
+            back, status_back = self._flow(grey, self._prev, moved, moved - velocity, KNOWN_LEVELS, backward=True)
+        else:
+            moved = np.empty_like(self._points)
+            status = np.zeros(len(self._points), np.uint8)
+            back = np.empty_like(self._points)
+            status_back = np.zeros(len(self._points), np.uint8)
+            for group, levels in ((known, KNOWN_LEVELS), (~known, self.config.pyramid_levels)):
+                if not group.any():
+                    continue
+                points, velocity = self._points[group], self._velocity[group]
+                moved[group], status[group] = self._flow(self._prev, grey, points, points + velocity, levels)
+                back[group], status_back[group] = self._flow(grey, self._prev, moved[group],
+                                                             moved[group] - velocity, levels, backward=True)
+        round_trip_px = np.linalg.norm(back - self._points, axis=1)
+        keep = (status == 1) & (status_back == 1) & (round_trip_px < self.config.fb_max_error_px)
+        return moved, keep
 
 
 @dataclass(frozen=True)
@@ -448,12 +469,14 @@ def track_frames(
     frame_size_px: tuple[int, int],
     config: TrackerConfig,
     progress: Callable[[int, float], None] | None = None,
+    kind: type[CornerTracker] | None = None,
 ) -> TrackingRun:
     """Track points through frames whose images are already reduced grey (see :func:`tracking_image`).
 
     ``progress`` is called after each frame with the frame count so far and the frame's time.
+    ``kind`` is the tracker class (default :class:`KltTracker`).
     """
-    tracker = KltTracker(frame_size_px, config)
+    tracker = (kind or KltTracker)(frame_size_px, config)
     count = 0
     first_time_s = last_time_s = float("nan")
     for frame in frames:

@@ -188,6 +188,3 @@ def test_csrt_stops_rather_than_drifting() -> None:
     both = klt.tracks.merge(csrt.tracks, on=["track", "frame"])
     assert (both["x_px_x"] - both["x_px_y"]).abs().max() < 8.0  # it stopped instead (measured 6.9 px)
     assert any("lost at frame" in w for w in csrt.warnings)
-    # CSRT is for chosen points (automatic ones: 60 s and 0.05 rad/s for 0.6 when tried)
-    refused = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", "--tracker", "csrt"])
-    assert refused.exit_code == 2 and "--track" in refused.stderr
