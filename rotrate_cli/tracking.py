@@ -23,8 +23,11 @@ import pandas as pd
 from rotrate_cli.decode import Frame
 
 KNOWN_LEVELS = 0
-#: Lucas-Kanade stopping rule (iterations, step in px) of the forward pass, which gives the positions.
-FORWARD_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
+#: Lucas-Kanade stopping rule (iterations, last step in px) of the forward pass, which gives the
+#: positions. Stopping at a 0.03 px step rather than 0.01 costs nothing measurable (accuracy suite:
+#: median 0.12% either way, largest error 0.69% either way; dinosaur unchanged) and saves a fifth
+#: of the Lucas-Kanade time.
+FORWARD_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.03)
 #: The backward pass only checks the round trip against ``fb_max_error_px`` (0.3 px): a step of
 #: 0.03 px is ten times finer than that, and stops 15% sooner than the forward rule.
 BACKWARD_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)
