@@ -79,7 +79,9 @@ if mode == "decode":
 elif mode == "decode-grey":
     frames = sum(1 for _ in FrameSource(path).frames(grey=True)); omega = None
 else:
-    result = analyze(path, AnalysisConfig(fixation_px=(fx, fy))); frames = result.frames; omega = result.omega_rad_s
+    kind = "csrt" if mode == "analyze-csrt" else "klt"
+    result = analyze(path, AnalysisConfig(fixation_px=(fx, fy), tracker_kind=kind))
+    frames = result.frames; omega = result.omega_rad_s
 elapsed = time.perf_counter() - start
 # VmHWM is this process's own peak; ru_maxrss would carry the parent's peak across exec
 peak_kib = next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmHWM"))
@@ -127,6 +129,11 @@ def main() -> None:
     print(f"  analyze     : {frames / analyze:8.1f} frames/s  (median of {args.rounds})")
     print(f"  ratio analyze/decode time: {analyze / decode:.2f}x  (target <= 2.5x); "
           f"against grey decoding {analyze / grey:.2f}x")
+    csrt_runs = [child("analyze-csrt", short, fixation) for _ in range(max(1, args.rounds // 2))]
+    csrt = statistics.median(r["seconds"] for r in csrt_runs)
+    csrt_error = 100 * (csrt_runs[0]["omega"] / truth["omega"] - 1)
+    print(f"  analyze csrt: {frames / csrt:8.1f} frames/s  (--tracker csrt on the automatic points: "
+          f"{csrt / analyze:.1f}x the default's time; omega error {csrt_error:+.3f}%)")
     long_ratio = statistics.median(r["seconds"] for r in long_runs) / statistics.median(long_decode_s)
     print(f"  4x clip     : ratio analyze/decode time {long_ratio:.2f}x  (the fixed costs of the fits spread "
           f"over {long_runs[0]['frames']} frames)")
