@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow lint bench bench-accuracy bench-accuracy-csrt clean
+.PHONY: demo test test-slow lint bench bench-accuracy bench-accuracy-paths bench-accuracy-csrt clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -35,6 +35,10 @@ bench: $(STAMP)
 ## bench-accuracy: the paper's method vs ours on 14 rendered conditions with known rates (renders cached)
 bench-accuracy: $(STAMP)
 	$(BIN)/python benchmarks/bench_accuracy.py
+
+## bench-accuracy-paths: the same suite with the axis angle from the tracks' paths (--angle-from paths)
+bench-accuracy-paths: $(STAMP)
+	$(BIN)/python benchmarks/bench_accuracy.py --angle-from paths
 
 ## bench-accuracy-csrt: the same suite with --tracker csrt on the automatic points
 bench-accuracy-csrt: $(STAMP)

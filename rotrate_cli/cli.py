@@ -192,6 +192,10 @@ def analyze_command(
     axis_angle: Annotated[float | None, typer.Option("--axis-angle", help="Axis angle in the image, degrees (0 "
                                                                         "vertical, + top end right); default: "
                                                                         "from the motion.")] = None,
+    angle_from: Annotated[str, typer.Option("--angle-from", help="How to find the axis angle: motion (default) "
+                                                                 "or paths (each track's elliptical path; "
+                                                                 "right when the camera looks down on the "
+                                                                 "object; slower).")] = "motion",
     window: Annotated[float | None, typer.Option("--window", help="Also measure omega(t) over a sliding "
                                                                   "window of this many seconds.")] = None,
     series_csv_path: Annotated[Path | None, typer.Option("--series-csv", help="Write omega(t) (needs --window) "
@@ -257,7 +261,8 @@ def analyze_command(
                 raise InputError("--series-csv needs --window SECONDS")
             check_output_path(series_csv_path, force)
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
-                                axis_angle_deg=axis_angle, window_s=window, start_s=start, end_s=end, every=every,
+                                axis_angle_deg=axis_angle, angle_from=angle_from, window_s=window, start_s=start,
+                                end_s=end, every=every,
                                 method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker, segment=segment,
                                 keep_tracks=overlay is not None,
                                 points_px=tuple((x, y) for x, y in (_numbers(t, 2, "--track", "320,180")
