@@ -84,6 +84,9 @@ def suite() -> list[Condition]:
         Condition("box-elevated-25", "elevated", SceneConfig(shape="box", omega_rad_s=0.5, elevation_deg=25, seed=115)),
         Condition("cylinder-elevated-30-cw", "elevated",
                   SceneConfig(shape="cylinder", omega_rad_s=-0.4, elevation_deg=30, seed=116)),
+        Condition("box-fov25-elevated-30", "elevated",
+                  SceneConfig(shape="box", omega_rad_s=0.5, projection="perspective", fov_deg=25, elevation_deg=30,
+                              seed=117)),
     ]
     return conditions
 

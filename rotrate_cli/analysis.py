@@ -78,6 +78,9 @@ class AnalysisConfig:
             of all the steps, :func:`rotrate_cli.axis.motion_angle_deg`) or ``paths`` (the long
             axis of each track's elliptical path, :func:`rotrate_cli.axis.ellipse_angle_deg`:
             right when the camera looks down on the object, where ``motion`` leans).
+        elevation_deg: how far the camera looks down on the object, degrees, for the pinhole
+            model (``fov_deg``/``focal_px``); None: level, or found from the paths with
+            ``angle_from="paths"``.
         fps: frame-rate override in frames per second (required for image sequences).
         start_s, end_s: the time span to analyse, in seconds (``end_s`` None: to the end).
         every: use every N-th frame's positions for the rates (tracking still sees every frame).
@@ -103,6 +106,7 @@ class AnalysisConfig:
     fps: float | None = None
     axis_angle_deg: float | None = None
     angle_from: str = "motion"
+    elevation_deg: float | None = None
     start_s: float = 0.0
     end_s: float | None = None
     every: int = 1
@@ -141,6 +145,7 @@ class Analysis:
         axis_found: True when the fixation point was found from the tracks.
         axis_angle_found: True when the angle was found from the tracks.
         axis_angle_from: how it was found (``motion`` or ``paths``; see ``AnalysisConfig.angle_from``).
+        elevation_deg: the camera's elevation found from the paths (NaN unless ``paths``).
         series: omega(t) over a sliding window (see :mod:`rotrate_cli.series`), or None.
         bodies: with ``segment``, every rigid body measured, the headline one (most tracks)
             first; None otherwise.
@@ -172,6 +177,7 @@ class Analysis:
     axis_found: bool = False
     axis_angle_found: bool = False
     axis_angle_from: str = "motion"
+    elevation_deg: float = math.nan
     series: pd.DataFrame | None = None
     bodies: tuple[Body, ...] | None = None
     tracks: pd.DataFrame | None = None
@@ -208,7 +214,8 @@ def _camera(config: AnalysisConfig, size_px: tuple[int, int], fixation_px: tuple
                                                                                            width_px)
     ux, uy = axes.unit_offset(angle_deg)
     axis_px = (fixation_px[0] - (width_px / 2.0 - 0.5)) * ux + (fixation_px[1] - (height_px / 2.0 - 0.5)) * uy
-    return rates.Camera(focal_px, axis_px / focal_px)
+    depth_scale = math.cos(math.radians(config.elevation_deg or 0.0))
+    return rates.Camera(focal_px, axis_px / focal_px, depth_scale)
 
 
 def _check_config(config: AnalysisConfig) -> None:
@@ -237,6 +244,11 @@ def _check_config(config: AnalysisConfig) -> None:
         raise InputError("give either --axis-angle or --angle-from paths, not both")
     if config.angle_from == "paths" and config.segment:
         raise InputError("--angle-from paths fits one rate to all paths; it cannot be combined with --segment")
+    if config.elevation_deg is not None:
+        if not (math.isfinite(config.elevation_deg) and -80 <= config.elevation_deg <= 80):
+            raise InputError("--elevation must be between -80 and 80 degrees")
+        if config.fov_deg is None and config.focal_px is None:
+            raise InputError("--elevation is for the pinhole model: give --fov or --focal-px too")
     if config.tracker_kind not in TRACKERS:
         raise InputError(f"--tracker must be one of {', '.join(TRACKERS)}; got {config.tracker_kind!r}")
     if config.segment and config.fixation_px is not None:
@@ -418,6 +430,9 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     release_free_memory()  # the tracker's store and the frames' buffers are gone
     angle = config.axis_angle_deg
     assumed_vertical = False
+    warnings_early: list[str] = []
+    elevation_found = math.nan
+    angle_source = config.angle_from
     if angle is None and everything["track"].nunique() < MIN_TRACKS_FOR_ANGLE:
         angle, assumed_vertical = 0.0, True  # a few points' wobble says little about the axis
     if angle is None:
@@ -431,9 +446,17 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
             angle = axes.motion_angle_deg(everything)
         angle = angle if math.isfinite(angle) else 0.0
         if config.angle_from == "paths":
-            angle = _path_angle(everything, angle)
+            shape = _path_shape(everything, angle)
+            if shape is None:
+                warnings_early.append("too few tracks turned far enough to read the axis from their paths: "
+                                      "it is found from the motion")
+                angle_source = "motion"
+            else:
+                angle, elevation_found = shape.angle_deg, shape.elevation_deg
+                if config.elevation_deg is None:
+                    config = replace(config, elevation_deg=elevation_found)
     expected = info.frame_count
-    warnings = list(run.notes)
+    warnings = list(run.notes) + warnings_early
     if assumed_vertical:
         warnings.append("too few tracks to find the axis's angle: taken as vertical (give --axis-angle DEG)")
     if expected and config.start_s == 0 and config.end_s is None and count < expected - 1:
@@ -446,7 +469,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
                "rejection": config.rejection, "axis_angle_deg": float(angle),
                "axis_found": config.fixation_px is None,
                "axis_angle_found": config.axis_angle_deg is None and not assumed_vertical,
-               "axis_angle_from": config.angle_from}
+               "axis_angle_from": angle_source, "elevation_deg": elevation_found}
     if config.segment:
         return _segmented(everything, angle, config, size_px, warnings, context)
     kept = None
@@ -605,19 +628,20 @@ def _across(angle_deg: float) -> bool:
     return math.isfinite(angle_deg) and abs(angle_deg) > 45.0
 
 
-def _path_angle(everything: pd.DataFrame, angle: float) -> float:
-    """The axis angle from the shape of the tracks' elliptical paths (see
-    :func:`rotrate_cli.axis.ellipse_angle_deg`), at a first rate from the recurrence along the
+def _path_shape(everything: pd.DataFrame, angle: float) -> axes.PathShape | None:
+    """The axis angle and camera elevation from the shape of the tracks' elliptical paths (see
+    :func:`rotrate_cli.axis.path_shape`), at a first rate from the recurrence along the
     direction of motion ``angle``, twice (on the dinosaur photographs: -4.0 degrees from the
-    motion, then -1.7, then -1.4; their axis leans -1.2); ``angle`` itself when either cannot
-    be had."""
+    motion, then -1.7, then -1.4; their axis leans -1.2); None when either cannot be had."""
+    shape = None
     for _ in range(2):  # the rate along a better direction is better, and so the next direction
         omega = axes.rate_from_recurrence(everything, axes.offsets_along(everything, (0.0, 0.0), angle))
-        refined = axes.ellipse_angle_deg(everything, omega, min_tracks=MIN_TRACKS_FOR_ANGLE)
-        if not math.isfinite(refined):
+        found = axes.path_shape(everything, omega, min_tracks=MIN_TRACKS_FOR_ANGLE)
+        if found is None:
             break
-        angle = refined
-    return angle
+        shape = found
+        angle = found.angle_deg
+    return shape
 
 
 def _turned(tracker: TrackerConfig) -> TrackerConfig:

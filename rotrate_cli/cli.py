@@ -196,6 +196,10 @@ def analyze_command(
                                                                  "or paths (each track's elliptical path; "
                                                                  "right when the camera looks down on the "
                                                                  "object; slower).")] = "motion",
+    elevation: Annotated[float | None, typer.Option("--elevation", help="How far the camera looks down on the "
+                                                                       "object, degrees, for the pinhole model "
+                                                                       "(--fov); found with --angle-from paths.")
+                         ] = None,
     window: Annotated[float | None, typer.Option("--window", help="Also measure omega(t) over a sliding "
                                                                   "window of this many seconds.")] = None,
     series_csv_path: Annotated[Path | None, typer.Option("--series-csv", help="Write omega(t) (needs --window) "
@@ -261,7 +265,8 @@ def analyze_command(
                 raise InputError("--series-csv needs --window SECONDS")
             check_output_path(series_csv_path, force)
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
-                                axis_angle_deg=axis_angle, angle_from=angle_from, window_s=window, start_s=start,
+                                axis_angle_deg=axis_angle, angle_from=angle_from, elevation_deg=elevation,
+                                window_s=window, start_s=start,
                                 end_s=end, every=every,
                                 method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker, segment=segment,
                                 keep_tracks=overlay is not None,

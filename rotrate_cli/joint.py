@@ -56,7 +56,7 @@ def _block_misfits(block: Ragged, cos_t: np.ndarray, sin_t: np.ndarray, camera: 
     rate's ``cos``/``sin`` at the distinct sample times.
 
     Orthographic: ``offset = A cos(wt) + B sin(wt)``. Pinhole (normalised coordinates ``x``,
-    see :func:`rotrate_cli.rates._pinhole`): ``x (1 - Z) = axis_n + L`` is linear in ``A, B``;
+    see :func:`rotrate_cli.rates._pinhole`): ``x (1 - k Z) = axis_n + L`` is linear in ``A, B``;
     solved once unweighted, then again with weights ``1 / (1 - Z)^2`` so that the misfit is
     the geometric one. Times need no centring: shifting them turns the two columns into
     combinations of each other, which leaves the misfit unchanged.
@@ -67,7 +67,7 @@ def _block_misfits(block: Ragged, cos_t: np.ndarray, sin_t: np.ndarray, camera: 
         target, first, second = block.offset, c, s_
     else:
         target = block.offset / camera.focal_px
-        x = target + camera.axis_n
+        x = (target + camera.axis_n) * camera.depth_scale
         first, second = c - x * s_, s_ + x * c
 
     def solve(weight2: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -79,7 +79,7 @@ def _block_misfits(block: Ragged, cos_t: np.ndarray, sin_t: np.ndarray, camera: 
     weight2: np.ndarray | float = 1.0
     a, b, b1, b2 = solve(weight2)
     if camera is not None:
-        depth = -block.spread(a) * s_ + block.spread(b) * c
+        depth = (-block.spread(a) * s_ + block.spread(b) * c) * camera.depth_scale
         weight2 = 1.0 / np.maximum(np.abs(1.0 - depth), 1e-3) ** 2
         a, b, b1, b2 = solve(weight2)
     misfit = np.maximum(sums(target * target * weight2) - a * b1 - b * b2, 0.0)

@@ -62,10 +62,14 @@ class Camera:
         focal_px: focal length in pixels (from the field of view: ``(width / 2) / tan(fov / 2)``).
         axis_n: the axis's horizontal image position relative to the principal point (the image
             centre), divided by the focal length.
+        depth_scale: the cosine of the camera's elevation (1 for a level camera). Seen from
+            above, a point's depth changes by its radial position times this cosine, while its
+            height only changes its distance by a constant per track (taken up by its amplitude).
     """
 
     focal_px: float
     axis_n: float
+    depth_scale: float = 1.0
 
 
 
@@ -227,14 +231,16 @@ def _orthographic(t: np.ndarray, weight: np.ndarray) -> Model:
     return model
 
 
-def _pinhole(t: np.ndarray, weight: np.ndarray, axis_n: float) -> Model:
+def _pinhole(t: np.ndarray, weight: np.ndarray, axis_n: float, depth_scale: float = 1.0) -> Model:
     """A pinhole camera aimed at the axis's depth, positions normalised by the focal length.
 
     With the camera at unit distance from the axis, a point at normalised radius r and angle th
-    projects to ``(axis_n + r sin th) / (1 - r cos th)``. Written with ``L = A cos(wt) + B sin(wt)``
-    (the orthographic offset) and its depth ``Z = -A sin(wt) + B cos(wt)``: ``x = (axis_n + L) / (1 - Z)``.
+    projects to ``(axis_n + r sin th) / (1 - k r cos th)``, ``k`` the cosine of the camera's
+    elevation (``depth_scale``). Written with ``L = A cos(wt) + B sin(wt)`` (the orthographic
+    offset) and its depth ``Z = -A sin(wt) + B cos(wt)``: ``x = (axis_n + L) / (1 - k Z)``.
     The sign of ``w`` is observable here (near points move faster), unlike orthographically.
     """
+    k = depth_scale
 
     def model(params: np.ndarray, rows: np.ndarray | slice) -> tuple[np.ndarray, np.ndarray]:
         a, b, w = params[:, 0:1], params[:, 1:2], params[:, 2:3]
@@ -243,13 +249,13 @@ def _pinhole(t: np.ndarray, weight: np.ndarray, axis_n: float) -> Model:
         lateral = a * c + b * s_
         depth = -a * s_ + b * c
         numerator = axis_n + lateral
-        denominator = 1.0 - depth
+        denominator = 1.0 - k * depth
         denominator = np.where(np.abs(denominator) > 1e-6, denominator, 1e-6)
         square = denominator**2
         jacobian = np.stack([
-            (c * denominator - numerator * s_) / square,
-            (s_ * denominator + numerator * c) / square,
-            tr * (depth * denominator - numerator * lateral) / square,
+            (c * denominator - numerator * k * s_) / square,
+            (s_ * denominator + numerator * k * c) / square,
+            tr * (depth * denominator - numerator * k * lateral) / square,
         ], axis=2) * weight[rows][:, :, None]
         return numerator / denominator * weight[rows], jacobian
 
@@ -349,7 +355,7 @@ def _fit_batch(
         # (A, B, w) is the same motion as (A, -B, -w): start the pinhole model from both senses
         scale = camera.focal_px
         target = (offset / scale + camera.axis_n) * weight
-        model = _pinhole(t, weight, camera.axis_n)
+        model = _pinhole(t, weight, camera.axis_n, camera.depth_scale)
         if sense == 0:
             starts = [params / [scale, scale, 1.0], params * [1.0 / scale, -1.0 / scale, -1.0]]
             fitted = [_gauss_newton(start, model, target, iterations) for start in starts]

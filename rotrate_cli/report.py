@@ -84,6 +84,7 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "found": analysis.axis_found,
             "angle_found": analysis.axis_angle_found,
             "angle_from": analysis.axis_angle_from if analysis.axis_angle_found else None,
+            "elevation_deg": _number(analysis.elevation_deg, 2),
         },
         "omega": _number(analysis.omega_rad_s),
         "omega_low": _number(analysis.omega_low_rad_s),
@@ -144,7 +145,9 @@ def render_table(analysis: Analysis, console: Console) -> None:
     if not math.isnan(fy):
         summary.add_row("axis", f"{analysis.axis_angle_deg:+.2f} deg from vertical (top end "
                         f"{'right' if analysis.axis_angle_deg >= 0 else 'left'})"
-                        + (f"  (found from the {analysis.axis_angle_from})" if analysis.axis_angle_found else ""))
+                        + (f"  (found from the {analysis.axis_angle_from})" if analysis.axis_angle_found else "")
+                        + ("" if math.isnan(analysis.elevation_deg)
+                           else f"; camera {analysis.elevation_deg:.0f} deg above or below"))
     summary.add_row("frames", f"{analysis.frames} over {analysis.duration_s:.2f} s at {analysis.fps:g} fps")
     reasons = Counter(r for r in analysis.features["reason"] if r)
     rejected = ", ".join(f"{n} {why}" for why, n in reasons.most_common()) or "none"

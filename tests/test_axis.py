@@ -175,7 +175,9 @@ def test_path_shape_finds_the_angle_where_the_motion_leans(angle_deg: float, ele
     tracks = _near_side_paths(angle_deg, elevation_deg, omega=0.5)
     motion = axes.motion_angle_deg(tracks)
     omega = axes.rate_from_recurrence(tracks, axes.offsets_along(tracks, (0.0, 0.0), motion))
-    paths = axes.ellipse_angle_deg(tracks, omega)
+    shape = axes.path_shape(tracks, omega)
+    assert shape is not None
+    paths = shape.angle_deg
 
     def apart(a: float, b: float) -> float:
         return abs((a - b + 90) % 180 - 90)
@@ -183,14 +185,17 @@ def test_path_shape_finds_the_angle_where_the_motion_leans(angle_deg: float, ele
     assert apart(motion, angle_deg) > 2.0  # the uneven near-side arcs lean the steps' direction
     assert apart(paths, angle_deg) < 0.3
     assert omega == pytest.approx(0.5, rel=0.03)
-    # at the exact rate it is exact to within the noise
-    assert apart(axes.ellipse_angle_deg(tracks, 0.5), angle_deg) < 0.1
+    # at the exact rate it is exact to within the noise, and the paths' width gives the elevation
+    exact = axes.path_shape(tracks, 0.5)
+    assert exact is not None
+    assert apart(exact.angle_deg, angle_deg) < 0.1
+    assert exact.elevation_deg == pytest.approx(elevation_deg, abs=0.3)
 
 
 def test_path_shape_needs_a_rate_and_enough_turning_tracks() -> None:
     tracks = _near_side_paths(0.0, 30.0, omega=0.5)
-    assert math.isnan(axes.ellipse_angle_deg(tracks, math.nan))
-    assert math.isnan(axes.ellipse_angle_deg(tracks[tracks["track"] < 5], 0.5))
+    assert axes.path_shape(tracks, math.nan) is None
+    assert axes.path_shape(tracks[tracks["track"] < 5], 0.5) is None
 
 
 def test_angle_from_paths_on_a_cylinder_seen_from_above(tmp_path: Path) -> None:
@@ -220,3 +225,31 @@ def test_angle_from_bad_combinations_are_one_line_errors(options: list[str], mes
     result = CliRunner().invoke(app, ["analyze", str(SAMPLES / "box_ortho.mp4"), *fixation, *options])
     assert result.exit_code == 2
     assert message in result.stderr and len(result.stderr.strip().splitlines()) == 1
+
+
+def test_pinhole_camera_seen_from_above(tmp_path: Path) -> None:
+    # a 25-degree lens looking down 30 degrees: a point's depth changes by its radial position
+    # times cos(30), which the level pinhole model overstates (measured -1.19%); given the
+    # elevation, or found from the paths, the model fits (+0.02%, -0.43%)
+    clip = tmp_path / "above.mp4"
+    result = CliRunner().invoke(app, ["synth", str(clip), "--shape", "box", "--omega", "0.5", "--projection",
+                                      "perspective", "--fov", "25", "--elevation", "30", "--size", "320x180",
+                                      "--duration", "4", "--seed", "45"])
+    assert result.exit_code == 0, result.output
+    fixation = tuple(truth_of(clip)["fixation_px"])
+    level = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=25.0))
+    given = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=25.0, elevation_deg=30.0))
+    found = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=25.0, angle_from="paths"))
+    assert abs(level.omega_rad_s - 0.5) > 0.005
+    assert given.omega_rad_s == pytest.approx(0.5, rel=0.003)
+    assert found.omega_rad_s == pytest.approx(0.5, rel=0.007)
+    assert found.elevation_deg == pytest.approx(30.0, abs=7.0)  # measured 25 (perspective narrows the paths)
+    assert math.isnan(level.elevation_deg)
+    for analysis in (level, given, found):
+        assert analysis.direction == "ccw"
+
+
+def test_elevation_needs_the_pinhole_model() -> None:
+    result = CliRunner().invoke(app, ["analyze", str(SAMPLES / "box_ortho.mp4"), "--fixation", "auto",
+                                      "--elevation", "20"])
+    assert result.exit_code == 2 and "--fov or --focal-px" in result.stderr

@@ -92,6 +92,25 @@ def test_pinhole_fit_recovers_rate_and_sense(omega: float) -> None:
     assert abs(ortho.omega_rad_s / abs(omega) - 1) > 0.01  # what ignoring perspective costs here
 
 
+def test_pinhole_fit_of_a_camera_looking_down() -> None:
+    # seen from 35 degrees above, depth changes by the radial position times cos(35)
+    focal_px, depth_scale = 1200.0, math.cos(math.radians(35.0))
+    time_s = np.arange(60) / 30.0
+    angle = 0.5 * time_s + 0.3
+    x_n = 0.25 * np.sin(angle) / (1 - depth_scale * 0.25 * np.cos(angle))
+    offset = x_n * focal_px
+    looking_down = rates._fit_batch(time_s[None], offset[None], np.ones((1, 60), bool),
+                                    rates.Camera(focal_px, 0.0, depth_scale))[0]
+    level = rates._fit_batch(time_s[None], offset[None], np.ones((1, 60), bool), rates.Camera(focal_px, 0.0))[0]
+    assert looking_down.omega_rad_s == pytest.approx(0.5, rel=1e-7)
+    assert abs(level.omega_rad_s / 0.5 - 1) > 0.005  # what taking the camera as level costs here
+    samples = pd.DataFrame({"track": 0, "time_s": time_s, "offset_px": offset})
+    # the joint fit's linear form agrees: its misfit vanishes at the true rate only with the elevation
+    from rotrate_cli.joint import track_misfits
+    assert track_misfits(samples, 0.5, rates.Camera(focal_px, 0.0, depth_scale))[0] == pytest.approx(0.0, abs=1e-9)
+    assert track_misfits(samples, 0.5, rates.Camera(focal_px, 0.0))[0] > 1e-3
+
+
 def test_body_wide_sense_from_many_weak_tracks(rng: np.random.Generator) -> None:
     focal_px = 1500.0
     camera = rates.Camera(focal_px, 0.0)
