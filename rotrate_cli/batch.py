@@ -211,14 +211,15 @@ def batch_exit_code(outcomes: Sequence[Outcome]) -> int:
 
 #: Manifest columns: required, and optional per-row options (as on the command line).
 MANIFEST_REQUIRED = ("file", "expected_omega", "tolerance_pct")
-MANIFEST_OPTIONAL = ("fixation", "fov", "focal_px", "fps", "axis_angle", "every", "method", "start", "end")
+MANIFEST_OPTIONAL = ("fixation", "fov", "focal_px", "fps", "axis_angle", "angle_from", "elevation", "every", "method",
+                     "start", "end")
 
 
 def read_manifest(path: Path, base: AnalysisConfig) -> list[Job]:
     """The jobs of a ``rotrate check`` manifest: a CSV with ``file, expected_omega,
     tolerance_pct`` and optionally ``fixation`` (``X,Y`` or ``auto``, the default), ``fov``,
-    ``focal_px``, ``fps``, ``axis_angle``, ``every``, ``method``, ``start``, ``end``. Files are
-    relative to the manifest's folder.
+    ``focal_px``, ``fps``, ``axis_angle``, ``angle_from``, ``elevation``, ``every``, ``method``,
+    ``start``, ``end``. Files are relative to the manifest's folder.
 
     Raises:
         InputError: the manifest is missing, unreadable, or a row is malformed (saying which).
@@ -281,7 +282,8 @@ def _manifest_job(path: Path, line: int, row: dict[str, str], base: AnalysisConf
     end = number("end")
     config = replace(
         base, fixation_px=fixation, fov_deg=number("fov"), focal_px=number("focal_px"), fps=number("fps"),
-        axis_angle_deg=number("axis_angle"), every=int(every or 1), method=row.get("method", "") or base.method,
+        axis_angle_deg=number("axis_angle"), angle_from=row.get("angle_from", "") or base.angle_from,
+        elevation_deg=number("elevation"), every=int(every or 1), method=row.get("method", "") or base.method,
         start_s=number("start", 0.0) or 0.0, end_s=end,
     )
     source = Path(row["file"])

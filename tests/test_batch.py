@@ -131,6 +131,19 @@ def test_a_failing_manifest_row_fails_the_check(tmp_path: Path, broken: list[Pat
     assert (suite.get("failures"), suite.get("errors")) == ("1", "1")
 
 
+def test_manifest_rows_carry_the_angle_source_and_elevation(tmp_path: Path) -> None:
+    from rotrate_cli import AnalysisConfig
+    from rotrate_cli.batch import read_manifest
+
+    manifest = tmp_path / "m.csv"
+    manifest.write_text("file,expected_omega,tolerance_pct,fov,angle_from,elevation\n"
+                        "a.mp4,0.5,1,25,paths,\nb.mp4,0.5,1,25,,30\nc.mp4,0.5,1,,,\n")
+    a, b, c = (job.config for job in read_manifest(manifest, AnalysisConfig(fixation_px=None)))
+    assert (a.angle_from, a.elevation_deg, a.fov_deg) == ("paths", None, 25.0)
+    assert (b.angle_from, b.elevation_deg) == ("motion", 30.0)
+    assert (c.angle_from, c.elevation_deg, c.fov_deg) == ("motion", None, None)
+
+
 @pytest.mark.parametrize(("text", "word"), [
     ("file,expected_omega\nx.mp4,1\n", "tolerance_pct"),
     ("file,expected_omega,tolerance_pct\nx.mp4,fast,1\n", "line 2"),
