@@ -426,6 +426,8 @@ def frame_command(
     at: Annotated[float, typer.Option("--at", help="Time of the frame, s.")] = 0.0,
     fps: Annotated[float | None, typer.Option("--fps", help="Frame rate; required for image sequences.")] = None,
     grid: Annotated[int, typer.Option("--grid", help="Grid spacing, px.")] = 50,
+    angle_from: Annotated[str, typer.Option("--angle-from", help="How to find the axis angle: motion (default) "
+                                                                 "or paths (as for analyze).")] = "motion",
     force: ForceOption = False,
     debug: DebugOption = False,
 ) -> None:
@@ -439,14 +441,19 @@ def frame_command(
         image = draw_grid(frame.image, grid)
         try:  # the axis from the motion around that time
             analysis = analyze(video, AnalysisConfig(fixation_px=None, fps=fps, start_s=max(0.0, at - 3.0),
-                                                     end_s=at + 3.0))
+                                                     end_s=at + 3.0, angle_from=angle_from))
+        except InputError as exc:
+            if "--angle-from" in str(exc):
+                raise
+            message = f"no axis found ({exc}); read --fixation X,Y off the grid"
         except RotrateError as exc:
             message = f"no axis found ({exc}); read --fixation X,Y off the grid"
         else:
             x, y = analysis.fixation_px
             draw_axis(image, (x, y), analysis.axis_angle_deg, f"{x:.1f},{y:.1f}")
+            hint = "" if angle_from == "motion" else f" --angle-from {angle_from}"
             message = (f"axis found through {x:.1f},{y:.1f} ({analysis.axis_angle_deg:+.1f} deg from vertical; "
-                       f"omega {analysis.omega_rad_s:.4f} rad/s): try --fixation {x:.1f},{y:.1f}")
+                       f"omega {analysis.omega_rad_s:.4f} rad/s): try --fixation {x:.1f},{y:.1f}{hint}")
         write_image(output, image, force)
         Console(highlight=False, soft_wrap=True).print(f"wrote {output} (frame {frame.index}, {frame.time_s:.3f} s); "
                                                        f"{message}", markup=False)

@@ -21,10 +21,12 @@ BOX = SAMPLES / "box_ortho.mp4"
 ROLLED = SAMPLES / "box_roll10.mp4"
 
 
-def test_frame_writes_a_still_with_a_grid_and_names_the_axis(tmp_path: Path) -> None:
+@pytest.mark.parametrize("angle_from", ["motion", "paths"])
+def test_frame_writes_a_still_with_a_grid_and_names_the_axis(tmp_path: Path, angle_from: str) -> None:
     still = tmp_path / "frame.png"
-    result = runner.invoke(app, ["frame", str(ROLLED), "--at", "2", "-o", str(still)])
+    result = runner.invoke(app, ["frame", str(ROLLED), "--at", "2", "-o", str(still), "--angle-from", angle_from])
     assert result.exit_code == 0, result.output
+    assert ("--angle-from paths" in result.stdout) == (angle_from == "paths")  # the hint repeats it
     image = cv2.imread(str(still))
     assert image is not None and image.shape == (360, 640, 3)
     truth = truth_of(ROLLED)
@@ -54,7 +56,7 @@ def test_frame_without_an_axis_still_writes_the_grid(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("options", "word"), [(["--at", "99"], "ends before"), (["--at", "-1"], "--at"),
-                                               (["--grid", "1"], "--grid")])
+                                               (["--grid", "1"], "--grid"), (["--angle-from", "x"], "--angle-from")])
 def test_frame_bad_options(tmp_path: Path, options: list[str], word: str) -> None:
     result = runner.invoke(app, ["frame", str(BOX), "-o", str(tmp_path / "f.png"), *options])
     lines = [line for line in result.stderr.splitlines() if line.strip()]
