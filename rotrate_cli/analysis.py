@@ -76,7 +76,7 @@ class AnalysisConfig:
             right); None to find it (see ``angle_from``).
         angle_from: how the angle is found when not given: ``motion`` (the principal direction
             of all the steps, :func:`rotrate_cli.axis.motion_angle_deg`) or ``paths`` (the long
-            axis of each track's elliptical path, :func:`rotrate_cli.axis.ellipse_angle_deg`:
+            axis of each track's elliptical path, :func:`rotrate_cli.axis.path_shape`:
             right when the camera looks down on the object, where ``motion`` leans).
         elevation_deg: how far the camera looks down on the object, degrees, for the pinhole
             model (``fov_deg``/``focal_px``); None: level, or found from the paths with

@@ -3,8 +3,11 @@
 Direction. Under orthographic projection every point of a body spinning about an axis moves
 along a line perpendicular to the axis's image (under perspective, along a flat ellipse), so the
 dominant direction of all frame-to-frame displacements is the direction in which offsets are
-measured, and the axis is perpendicular to it. Angles follow :func:`unit_offset`: 0 is a
-vertical axis, positive leans the axis's top end to the right (a camera rolled anticlockwise).
+measured, and the axis is perpendicular to it. Seen from above, points move on ellipses instead,
+and the steps' direction leans with which part of each ellipse was seen; :func:`path_shape`
+fits each track's ellipse at a known rate and takes their long axes (and, from their width, the
+camera's elevation). Angles follow :func:`unit_offset`: 0 is a vertical axis, positive leans the
+axis's top end to the right (a camera rolled anticlockwise).
 
 Position. The paper's appendix: with the axis at an unknown offset ``o`` along that direction,
 every point obeys ``s'' = -omega^2 (s - o)``. Its exact discrete form at a lag of ``m`` frames,
