@@ -83,7 +83,7 @@ EveryOption = Annotated[int, typer.Option("--every", help="Use every N-th frame'
 DebugOption = Annotated[bool, typer.Option("--debug", help="Show the traceback of an error.")]
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
 SchedulerOption = Annotated[str | None, typer.Option("--scheduler", help="Run the batch on this Dask cluster "
-                                                                         "(tcp://HOST:8786; needs rotrate[dask]).")]
+                                                                         "(tcp://HOST:8786; needs rotrate\\[dask]).")]
 
 
 def _fail(message: str, code: int) -> typer.Exit:
@@ -217,7 +217,7 @@ def analyze_command(
     unit: Annotated[str | None, typer.Option("--unit", help="The name of --scale's unit (e.g. in, mm).")] = None,
     plot: Annotated[Path | None, typer.Option("--plot", help="Also write a picture: tracks against the fit, "
                                                               "each feature's rate, omega over time (.png; "
-                                                              "needs rotrate[plot]).")] = None,
+                                                              "needs rotrate\\[plot]).")] = None,
     overlay: Annotated[Path | None, typer.Option("--overlay", help="Also write a video with the axis, the "
                                                                     "tracks and the running omega drawn on it "
                                                                     "(.mp4).")] = None,

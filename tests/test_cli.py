@@ -185,3 +185,13 @@ def test_a_reader_that_stops_early_costs_no_file_and_no_error(tmp_path: Path) ->
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("feature,frame") and done.stderr == ""
     assert series.read_text().startswith("time_s,")
+
+
+def test_help_names_the_optional_extras() -> None:
+    # rich reads "[plot]" as markup and drops it unless escaped
+    from typer.testing import CliRunner
+
+    from rotrate_cli.cli import app
+
+    result = CliRunner().invoke(app, ["analyze", "--help"], env={"COLUMNS": "200"})
+    assert "rotrate[plot]" in result.stdout and "rotrate[dask]" in result.stdout
