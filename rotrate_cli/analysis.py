@@ -574,8 +574,8 @@ def _measure_body(
 
     result, camera = measure(fixation)
     release_free_memory()
-    if config.fixation_px is None and config.method == "fit" and camera is None:
-        fixation, result = _refine_fixation(result, fixation, angle, measure)
+    if config.fixation_px is None and config.method == "fit":
+        fixation, result, camera = _refine_fixation(result, camera, fixation, angle, measure)
     return fixation, result, camera
 
 
@@ -672,22 +672,27 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
 
 
 def _refine_fixation(
-    result: RateResult, fixation: tuple[float, float], angle_deg: float,
+    result: RateResult, camera: rates.Camera | None, fixation: tuple[float, float], angle_deg: float,
     measure: Callable[[tuple[float, float]], tuple[RateResult, rates.Camera | None]],
-) -> tuple[tuple[float, float], RateResult]:
+) -> tuple[tuple[float, float], RateResult, rates.Camera | None]:
     """Move a found fixation point to the shared-axis least squares of the inlier tracks at the
-    measured rate, and measure again (twice at most: it converges in one step when omega is
-    well determined)."""
+    measured rate (with the pinhole model when there is a ``camera``), and measure again (twice
+    at most: it converges in one step when omega is well determined)."""
     ux, uy = axes.unit_offset(angle_deg)
     for _ in range(2):
-        used = result.features.loc[result.features["inlier"], "track"]
+        inlier = result.features["inlier"]
+        used = result.features.loc[inlier, "track"]
         offsets = result.offsets[result.offsets["track"].isin(used)]
-        shift = axes.refine_axis_offset(offsets, result.combined.omega_rad_s)
+        omega = result.combined.omega_rad_s
+        if camera is not None:  # the pinhole model tells the sense: the rate is signed there
+            senses = result.features.loc[inlier, "sense"].to_numpy(dtype=float)
+            omega *= (float(np.sign(np.nansum(senses))) if np.isfinite(senses).any() else 0.0) or 1.0
+        shift = axes.refine_axis_offset(offsets, omega, camera)
         if not math.isfinite(shift) or abs(shift) < 0.02:
             break
         fixation = (fixation[0] + shift * ux, fixation[1] + shift * uy)
-        result, _ = measure(fixation)
-    return fixation, result
+        result, camera = measure(fixation)
+    return fixation, result, camera
 
 
 def _result(rates_result: RateResult, **context: object) -> Analysis:

@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from rotrate_cli.ragged import Ragged
-from rotrate_cli.rates import solve_two_columns
+from rotrate_cli.rates import Camera, solve_two_columns
 
 #: Triples needed for a regression at one lag, and the largest rotation per lag used (rad):
 #: beyond it the regression's slope saturates.
@@ -275,20 +275,32 @@ def _weighted_median(values: np.ndarray, weight: np.ndarray) -> float:
     return float(values[order][np.searchsorted(cumulative, cumulative[-1] / 2)])
 
 
-def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float) -> float:
+def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, camera: Camera | None = None) -> float:
     """The shared axis offset that, with each track's own amplitude and phase, best explains
     ``samples`` (``track, time_s, offset_px`` sorted by track then time) at ``omega_rad_s``:
     the correction to add to the fixation's position along the offset direction.
 
-    Per track, with ``P`` the projection on the ``cos(wt), sin(wt)`` columns, the least squares
-    of ``offset - o ~ a cos + b sin`` over a shared ``o`` is
-    ``o = sum 1.(I - P) offset / sum 1.(I - P) 1``.
+    Per track, with ``P`` the projection on its two columns, the least squares of
+    ``offset - o ~ a first + b second`` over a shared ``o`` is
+    ``o = sum 1.(I - P) offset / sum 1.(I - P) 1``. Orthographic, the columns are
+    ``cos(wt), sin(wt)``. With a pinhole ``camera`` (offsets from the fixation the camera was
+    made for; ``omega_rad_s`` signed, as the fits' sense), the model
+    ``x (1 - k Z) = axis_n + L`` in normalised coordinates (see :func:`rotrate_cli.rates._pinhole`)
+    is ``offset / f - o / f = a (c - k x s) + b (s + k x c)``: linear in ``a, b, o`` again, with
+    columns that depend on the data but not on ``o``.
     """
     tracks = Ragged.from_samples(samples)
     if len(tracks) == 0 or not math.isfinite(omega_rad_s):
         return math.nan
     angle = omega_rad_s * tracks.times_s
     c, s_ = np.cos(angle)[tracks.time_index], np.sin(angle)[tracks.time_index]
+    y = tracks.offset
+    scale = 1.0
+    if camera is not None:
+        scale = camera.focal_px
+        y = y / scale
+        x = (y + camera.axis_n) * camera.depth_scale
+        c, s_ = c - x * s_, s_ + x * c
     sums = tracks.sums
     cc, ss, cs, sum_c, sum_s = sums(c * c), sums(s_ * s_), sums(c * s_), sums(c), sums(s_)
 
@@ -297,11 +309,10 @@ def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float) -> float:
         a, b = solve_two_columns(cc, ss, cs, sum_cv, sum_sv)
         return float((sum_v - a * sum_c - b * sum_s).sum())
 
-    y = tracks.offset
     denominator = unexplained_dot_one(tracks.counts.astype(float), sum_c, sum_s)
     if denominator <= 0:
         return math.nan
-    return unexplained_dot_one(sums(y), sums(c * y), sums(s_ * y)) / denominator
+    return scale * unexplained_dot_one(sums(y), sums(c * y), sums(s_ * y)) / denominator
 
 
 def point_on_axis(offset_px: float, angle_deg: float, tracks: pd.DataFrame) -> tuple[float, float]:

@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 
 from rotrate_cli import AnalysisConfig, analyze
 from rotrate_cli import axis as axes
+from rotrate_cli import rates
 from rotrate_cli.analysis import rates_from_offsets
 from rotrate_cli.cli import app
 from rotrate_cli.outliers import RejectionConfig
@@ -75,6 +76,27 @@ def test_recurrence_ignores_lags_only_a_few_long_tracks_reach(rng: np.random.Gen
     assert axes.axis_offset_from_recurrence(tracks, position) == pytest.approx(320.0, abs=0.5)
     # (before: 760, the long track's own centre.) The first rate is a starting guess: within 5%
     assert axes.rate_from_recurrence(tracks, position) == pytest.approx(1.5, rel=0.05)
+
+
+@pytest.mark.parametrize("omega", [0.7, -0.7])
+def test_refining_the_axis_with_a_pinhole_camera(rng: np.random.Generator, omega: float) -> None:
+    # normalised image x = (axis_n + r sin th) / (1 - k r cos th); offsets measured from a point
+    # 3 px right of the axis: the refinement moves it back by 3 px, in either sense
+    focal_px, axis_px, depth_scale = 900.0, 40.0, math.cos(math.radians(20.0))
+    rows = []
+    for track in range(60):
+        time_s = np.arange(int(rng.integers(0, 60)), int(rng.integers(80, 150))) / 30.0
+        radius, phase = rng.uniform(0.03, 0.12), rng.uniform(0, 2 * np.pi)
+        angle = omega * time_s + phase
+        x_n = (axis_px / focal_px + radius * np.sin(angle)) / (1 - depth_scale * radius * np.cos(angle))
+        rows.append(pd.DataFrame({"track": track, "time_s": time_s,
+                                  "offset_px": x_n * focal_px - (axis_px + 3.0) + rng.normal(0, 0.05, len(time_s))}))
+    samples = pd.concat(rows, ignore_index=True)
+    camera = rates.Camera(focal_px, (axis_px + 3.0) / focal_px, depth_scale)
+    pinhole = axes.refine_axis_offset(samples, omega, camera)
+    assert pinhole == pytest.approx(-3.0, abs=0.03)
+    # the orthographic model misplaces it (by 0.1 px here: near points move faster)
+    assert abs(axes.refine_axis_offset(samples, abs(omega)) + 3.0) > 2 * abs(pinhole + 3.0)
 
 
 def test_refining_the_axis_moves_it_onto_the_truth(rng: np.random.Generator) -> None:
