@@ -392,6 +392,9 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     try:
         return _analyze(source, config, progress)
     except NoResultError as error:
+        if config.every > 1 and " short" in str(error):
+            raise NoResultError(f"{error}; --every {config.every} keeps one frame in {config.every}, which leaves "
+                                "these tracks too few samples to fit: try a smaller --every") from error
         if config.tracker_kind == "csrt" and not config.points_px:
             raise NoResultError(f"{error}; CSRT loses points that jump far between frames (stills taken "
                                 "far apart, fast turns): the default --tracker klt follows those") from error

@@ -195,3 +195,11 @@ def test_help_names_the_optional_extras() -> None:
 
     result = CliRunner().invoke(app, ["analyze", "--help"], env={"COLUMNS": "200"})
     assert "rotrate[plot]" in result.stdout and "rotrate[dask]" in result.stdout
+
+
+def test_too_sparse_every_says_so() -> None:
+    # one frame in 30 of a 150-frame clip: no track keeps enough samples to fit
+    result = runner.invoke(app, ["analyze", str(SAMPLES / "box_ortho.mp4"), "--fixation", "319.5,179.5",
+                                 "--every", "30"])
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.exit_code == 1 and len(lines) == 1 and "try a smaller --every" in lines[0]
