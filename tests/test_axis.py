@@ -10,9 +10,8 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from rotrate_cli import AnalysisConfig, analyze
+from rotrate_cli import AnalysisConfig, analyze, rates
 from rotrate_cli import axis as axes
-from rotrate_cli import rates
 from rotrate_cli.analysis import rates_from_offsets
 from rotrate_cli.cli import app
 from rotrate_cli.outliers import RejectionConfig
