@@ -33,7 +33,7 @@ from rotrate_cli.outliers import (
     judge_fits,
     judge_paper,
 )
-from rotrate_cli.segment import Body, segment_tracks
+from rotrate_cli.segment import Body, segment_tracks, unresolved
 from rotrate_cli.series import rate_series
 from rotrate_cli.tracking import (
     VIDEO_BLUR_SIGMA_PX,
@@ -607,6 +607,10 @@ def _segmented(
     skipped = len(groups) - len(measured)
     if skipped:
         warnings.append(f"{skipped} group(s) of tracks gave no trustworthy rate and are not reported")
+    measured, folded = _distinct_bodies(measured, ux, uy, extent_px)
+    if folded:
+        warnings.append(f"{folded} smaller group(s) of tracks measured like a larger body (rate and axis within "
+                        "the resolution) and are not reported as bodies of their own")
     bodies = tuple(
         Body(r.combined.omega_rad_s, r.combined.omega_low_rad_s, r.combined.omega_high_rad_s,
              (float(f[0]), float(f[1])), r.direction, r.combined.tracks_used, total)
@@ -615,6 +619,23 @@ def _segmented(
     fixation, result, camera, _ = measured[0]
     return _result(result, fixation_px=(float(fixation[0]), float(fixation[1])), method=_method_name(config, camera),
                    warnings=tuple(warnings), series=None, bodies=bodies, **context)
+
+
+def _distinct_bodies(measured: list, ux: float, uy: float, extent_px: float) -> tuple[list, int]:
+    """The measured bodies (largest group first) without those whose measured rate and axis lie
+    within the resolution of a larger one (:func:`rotrate_cli.segment.unresolved`), and how
+    many were left out. Grouping works on each track's own rough estimates; a group of
+    mis-tracks along an outline can look apart there and measure like the body it borders:
+    seen on a 32 s 720p cylinder, 57 rim tracks (1% of them) measured 1.27 rad/s about an axis 8
+    px from the body's 1.57."""
+    kept: list = []
+    for entry in measured:
+        fixation, result = entry[0], entry[1]
+        axis_px = fixation[0] * ux + fixation[1] * uy
+        if not any(unresolved(result.combined.omega_rad_s, axis_px, other[1].combined.omega_rad_s,
+                              other[0][0] * ux + other[0][1] * uy, extent_px) for other in kept):
+            kept.append(entry)
+    return kept, len(measured) - len(kept)
 
 
 def _by_track(tracks: pd.DataFrame) -> pd.DataFrame:

@@ -159,15 +159,13 @@ def segment_tracks(tracks: pd.DataFrame, position: np.ndarray, extent_px: float)
 
     ids = np.unique(track)
     centres: list[tuple[float, float]] = []
-    axis_tolerance_px = AXIS_TOLERANCE_FRACTION * extent_px
     for group in _modes(motion, extent_px):
         rows = motion[motion["track"].isin(group)]
         rate, axis = float(rows["omega_rad_s"].median()), float(rows["axis_px"].median())
         members = np.isin(ids, group)
         own = float(misfits(rate, axis)[members].sum())
         fringe = any(
-            (abs(np.log(rate / r)) <= RESOLUTION * RATE_TOLERANCE and abs(axis - a) <= RESOLUTION * axis_tolerance_px)
-            or float(misfits(r, a)[members].sum()) <= MERGE_RATIO * own
+            unresolved(rate, axis, r, a, extent_px) or float(misfits(r, a)[members].sum()) <= MERGE_RATIO * own
             for r, a in centres
         )
         if not fringe:
@@ -182,6 +180,13 @@ def segment_tracks(tracks: pd.DataFrame, position: np.ndarray, extent_px: float)
     clear = order[:, 0] <= AMBIGUITY * order[:, 1]
     groups = [ids[clear & (best == b)] for b in range(len(centres))]
     return sorted((g for g in groups if len(g) >= MIN_BODY_TRACKS), key=len, reverse=True)
+
+
+def unresolved(rate_a: float, axis_a_px: float, rate_b: float, axis_b_px: float, extent_px: float) -> bool:
+    """True when two bodies' rates and axis positions (along the offset direction) both lie within
+    :data:`RESOLUTION` tolerances of each other: they cannot be told apart, so they are one."""
+    return (abs(np.log(rate_a / rate_b)) <= RESOLUTION * RATE_TOLERANCE
+            and abs(axis_a_px - axis_b_px) <= RESOLUTION * AXIS_TOLERANCE_FRACTION * extent_px)
 
 
 def _modes(motion: pd.DataFrame, extent_px: float) -> list[np.ndarray]:

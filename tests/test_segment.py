@@ -96,3 +96,19 @@ def test_segment_usage_errors(options: list[str], word: str) -> None:
     assert result.exit_code == 2
     lines = [line for line in result.stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("rotrate: error: ") and word in lines[0]
+
+
+def test_a_group_that_measures_like_a_larger_body_is_not_a_body_of_its_own() -> None:
+    # seen on a 32 s 720p cylinder: 57 rim tracks measured 1.27 rad/s about an axis 8 px from the
+    # body's (1.57 rad/s); within the resolution, so not reported as a second body
+    from types import SimpleNamespace
+
+    from rotrate_cli.analysis import _distinct_bodies
+
+    def entry(omega: float, x_px: float) -> tuple:
+        return ((x_px, 360.0), SimpleNamespace(combined=SimpleNamespace(omega_rad_s=omega)), None, 100)
+
+    measured = [entry(1.57, 638.0), entry(1.27, 630.0), entry(0.5, 640.0), entry(1.57, 1000.0)]
+    kept, folded = _distinct_bodies(measured, 1.0, 0.0, 1280.0)
+    assert folded == 1
+    assert [(e[1].combined.omega_rad_s, e[0][0]) for e in kept] == [(1.57, 638.0), (0.5, 640.0), (1.57, 1000.0)]
