@@ -147,7 +147,7 @@ def render_table(analysis: Analysis, console: Console) -> None:
                         f"{'right' if analysis.axis_angle_deg >= 0 else 'left'})"
                         + (f"  (found from the {analysis.axis_angle_from})" if analysis.axis_angle_found else "")
                         + ("" if math.isnan(analysis.elevation_deg)
-                           else f"; camera {analysis.elevation_deg:.0f} deg above or below"))
+                           else f"; camera elevation {analysis.elevation_deg:.0f} deg, up or down"))
     summary.add_row("frames", f"{analysis.frames} over {analysis.duration_s:.2f} s at {analysis.fps:g} fps")
     reasons = Counter(r for r in analysis.features["reason"] if r)
     rejected = ", ".join(f"{n} {why}" for why, n in reasons.most_common()) or "none"
