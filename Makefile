@@ -32,7 +32,7 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_speed.py
 
-## bench-accuracy: the paper's method vs ours on 14 rendered conditions with known rates (renders cached)
+## bench-accuracy: the paper's method vs ours on 17 rendered conditions with known rates (renders cached)
 bench-accuracy: $(STAMP)
 	$(BIN)/python benchmarks/bench_accuracy.py
 
