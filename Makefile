@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow lint bench bench-accuracy bench-accuracy-paths bench-accuracy-csrt clean
+.PHONY: demo test test-slow lint bench bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-fov-auto clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -43,6 +43,10 @@ bench-accuracy-paths: $(STAMP)
 ## bench-accuracy-csrt: the same suite with --tracker csrt on the automatic points
 bench-accuracy-csrt: $(STAMP)
 	$(BIN)/python benchmarks/bench_accuracy.py --tracker csrt
+
+## bench-accuracy-fov-auto: the same suite with no field of view given: found from the tracks (--fov auto)
+bench-accuracy-fov-auto: $(STAMP)
+	$(BIN)/python benchmarks/bench_accuracy.py --fov-auto
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache bench_out

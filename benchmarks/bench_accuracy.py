@@ -22,6 +22,7 @@ import dataclasses
 import functools
 import hashlib
 import json
+import math
 import os
 import sys
 import time
@@ -104,13 +105,16 @@ def _clip(condition: Condition) -> tuple[Path, dict]:
     return path, write_clip(condition.scene, path, force=True)
 
 
-def measure(condition: Condition, tracker: str = "klt", angle_from: str = "motion") -> dict[str, object]:
-    """Render (or reuse) the clip, track it once (with ``tracker``), and estimate with both methods."""
+def measure(condition: Condition, tracker: str = "klt", angle_from: str = "motion",
+            fov_auto: bool = False) -> dict[str, object]:
+    """Render (or reuse) the clip, track it once (with ``tracker``), and estimate with both methods.
+    The true field of view is given for perspective clips, or with ``fov_auto`` none is given to
+    any clip and it is found (``--fov auto``)."""
     path, truth = _clip(condition)
     started = time.perf_counter()
-    fov = condition.scene.fov_deg if condition.scene.projection == "perspective" else None
+    fov = condition.scene.fov_deg if condition.scene.projection == "perspective" and not fov_auto else None
     ours = analyze(path, AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), every=condition.every, fov_deg=fov,
-                                        tracker_kind=tracker, angle_from=angle_from))
+                                        tracker_kind=tracker, angle_from=angle_from, find_focal=fov_auto))
     seconds = time.perf_counter() - started
     step = max(1, round(PAPER_STEP_S * condition.scene.fps / condition.every))
     paper = rates_from_offsets(thin(ours.offsets, step * condition.every), "paper", RejectionConfig()).combined
@@ -130,6 +134,8 @@ def measure(condition: Condition, tracker: str = "klt", angle_from: str = "motio
         "true_direction": truth["direction"],
         "tracks_used": ours.tracks_used,
         "angle_deg": ours.axis_angle_deg,
+        "fov_found": (ours.focal.fov_deg if ours.focal is not None else math.nan),
+        "true_fov": condition.scene.fov_deg if condition.scene.projection == "perspective" else 0.0,
         "analyze_s": seconds,
     }
 
@@ -170,20 +176,24 @@ def main() -> int:
                         help="the automatic points' tracker (the targets are those of the default, klt)")
     parser.add_argument("--angle-from", default="motion", choices=("motion", "paths"),
                         help="how the axis angle is found (every clip's true angle is 0)")
+    parser.add_argument("--fov-auto", action="store_true",
+                        help="find every clip's field of view from its tracks (--fov auto; 0: orthographic)")
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     conditions = [c for c in suite() if not args.only or c.name in args.only.split(",")]
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         table = pd.DataFrame(list(pool.map(functools.partial(measure, tracker=args.tracker,
-                                                                  angle_from=args.angle_from), conditions)))
+                                                                  angle_from=args.angle_from,
+                                                                  fov_auto=args.fov_auto), conditions)))
     suffix = ("" if args.tracker == "klt" else f"_{args.tracker}") + \
-        ("" if args.angle_from == "motion" else f"_{args.angle_from}")
+        ("" if args.angle_from == "motion" else f"_{args.angle_from}") + ("_fov_auto" if args.fov_auto else "")
     table.to_csv(OUT.parent / f"accuracy{suffix}.csv", index=False)
     print(f"tracker: {args.tracker}; angle from the {args.angle_from}; "
+          f"field of view {'found from the tracks' if args.fov_auto else 'given for perspective clips'}; "
           f"analyze time per clip: median {table['analyze_s'].median():.1f} s")
     pd.set_option("display.width", 200)
     columns = ["condition", "group", "truth", "paper", "paper_err_pct", "ours", "ours_err_pct", "low", "high",
-               "covers", "direction", "tracks_used", "angle_deg"]
+               "covers", "direction", "tracks_used", "angle_deg"] + (["true_fov", "fov_found"] if args.fov_auto else [])
     print(table[columns].to_string(index=False, float_format=lambda v: f"{v:.4f}"))
     print()
     summary, missed = summarise(table)
@@ -194,7 +204,7 @@ def main() -> int:
     print("targets (ortho median <= 0.3%, max <= 1%; perspective max <= 2%; coverage >= 90%): "
           + ("all met" if not missed else "MISSED: " + "; ".join(missed))
           + ("" if args.tracker == "klt" else f" (they are the default tracker's: {args.tracker} for reference)"))
-    if args.tracker != "klt" or args.angle_from != "motion":
+    if args.tracker != "klt" or args.angle_from != "motion" or args.fov_auto:
         return 1 if len(wrong_sense) else 0
     return 1 if missed or len(wrong_sense) else 0
 

@@ -22,6 +22,7 @@ from rotrate_cli.chosen import TRACKERS, follow_points
 from rotrate_cli.csrt import CsrtTracker, csrt_settings
 from rotrate_cli.decode import FrameSource, prefetch
 from rotrate_cli.errors import InputError, NoResultError
+from rotrate_cli.focal import FocalEstimate, estimate_focal
 from rotrate_cli.joint import joint_fit
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import (
@@ -88,6 +89,9 @@ class AnalysisConfig:
         fov_deg: the camera's horizontal field of view, degrees, for the pinhole model; None
             (and no ``focal_px``) treats the view as orthographic, as the paper does.
         focal_px: the focal length in pixels, instead of ``fov_deg``.
+        find_focal: find the focal length (and the camera's elevation) from the tracks' motion
+            in both image directions (:mod:`rotrate_cli.focal`; ``--fov auto``), instead of
+            ``fov_deg``/``focal_px``; a view with no measurable perspective stays orthographic.
         tracker: tracking settings.
         rejection: outlier-rejection thresholds.
         window_s: also measure omega(t) over a sliding window this long (None: not).
@@ -113,6 +117,7 @@ class AnalysisConfig:
     method: str = "fit"
     fov_deg: float | None = None
     focal_px: float | None = None
+    find_focal: bool = False
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
     rejection: RejectionConfig = field(default_factory=RejectionConfig)
     window_s: float | None = None
@@ -145,7 +150,9 @@ class Analysis:
         axis_found: True when the fixation point was found from the tracks.
         axis_angle_found: True when the angle was found from the tracks.
         axis_angle_from: how it was found (``motion`` or ``paths``; see ``AnalysisConfig.angle_from``).
-        elevation_deg: the camera's elevation found from the paths (NaN unless ``paths``).
+        elevation_deg: the camera's elevation found from the paths (``paths``) or with the
+            focal length (``find_focal``); NaN otherwise.
+        focal: with ``find_focal``, what the tracks said about the camera; None otherwise.
         series: omega(t) over a sliding window (see :mod:`rotrate_cli.series`), or None.
         bodies: with ``segment``, every rigid body measured, the headline one (most tracks)
             first; None otherwise.
@@ -178,6 +185,7 @@ class Analysis:
     axis_angle_found: bool = False
     axis_angle_from: str = "motion"
     elevation_deg: float = math.nan
+    focal: FocalEstimate | None = None
     series: pd.DataFrame | None = None
     bodies: tuple[Body, ...] | None = None
     tracks: pd.DataFrame | None = None
@@ -247,7 +255,7 @@ def _check_config(config: AnalysisConfig) -> None:
     if config.elevation_deg is not None:
         if not (math.isfinite(config.elevation_deg) and -80 <= config.elevation_deg <= 80):
             raise InputError("--elevation must be between -80 and 80 degrees")
-        if config.fov_deg is None and config.focal_px is None:
+        if config.fov_deg is None and config.focal_px is None and not config.find_focal:
             raise InputError("--elevation is for the pinhole model: give --fov or --focal-px too")
     if config.tracker_kind not in TRACKERS:
         raise InputError(f"--tracker must be one of {', '.join(TRACKERS)}; got {config.tracker_kind!r}")
@@ -255,6 +263,11 @@ def _check_config(config: AnalysisConfig) -> None:
         raise InputError("--segment finds each body's axis itself; drop --fixation (or use --fixation auto)")
     if config.segment and config.window_s is not None:
         raise InputError("--window follows one body; it cannot be combined with --segment")
+    if config.find_focal and (config.fov_deg is not None or config.focal_px is not None):
+        raise InputError("--fov auto finds the focal length: drop --focal-px")
+    if config.find_focal and (config.segment or config.points_px or config.method == "paper"):
+        raise InputError("--fov auto needs many automatic tracks on one body: it cannot be combined with "
+                         "--segment, --track or --method paper")
     if config.method == "paper" and (config.fov_deg is not None or config.focal_px is not None):
         raise InputError("--method paper is orthographic, as in the paper; drop --fov/--focal-px or use --method fit")
 
@@ -479,6 +492,12 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     if config.keep_tracks:  # for pictures of the measurement (an overlay): numbered as the features
         kept = everything[["frame", "time_s", "track", "x_px", "y_px"]].assign(track=everything["track"] + 1)
     body = _prepare_body(everything, angle, config)
+    focal = None
+    if config.find_focal:
+        config, focal, found = _find_focal(everything, body, angle, config, size_px)
+        warnings.extend(found)
+        if focal is not None and math.isfinite(focal.focal_px):
+            context["elevation_deg"] = focal.elevation_deg
     del everything  # the offsets hold what is needed: a long clip's positions need not stay
     release_free_memory()
     fixation, result, camera = _measure_body(body, angle, config, size_px)
@@ -488,7 +507,25 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         series = rate_series(result.offsets, config.window_s,
                              lambda part: rates_from_offsets(part, config.method, config.rejection, camera).combined)
     return _result(result, fixation_px=(float(fixation[0]), float(fixation[1])), method=_method_name(config, camera),
-                   warnings=tuple(warnings), series=series, tracks=kept, **context)
+                   warnings=tuple(warnings), series=series, tracks=kept, focal=focal, **context)
+
+
+def _find_focal(everything: pd.DataFrame, body: _Prepared, angle: float, config: AnalysisConfig,
+                size_px: tuple[int, int]) -> tuple[AnalysisConfig, FocalEstimate | None, list[str]]:
+    """``--fov auto``: the focal length (and elevation) from the tracks, put into the
+    configuration as if given; orthographic when no perspective shows."""
+    omega = axes.rate_from_recurrence(everything, axes.offsets_along(everything, body.fixation_px, angle))
+    estimate = None
+    if math.isfinite(omega) and omega > 0:
+        estimate = estimate_focal(everything, body.fixation_px, angle, omega, size_px,
+                                  config.elevation_deg if config.elevation_deg is not None else 0.0)
+    if estimate is None:
+        return config, None, ["too few tracks turned far enough to find the focal length: measured as "
+                              "orthographic (give --fov DEG)"]
+    if not math.isfinite(estimate.focal_px):
+        return config, estimate, []
+    elevation = config.elevation_deg if config.elevation_deg is not None else estimate.elevation_deg
+    return replace(config, focal_px=estimate.focal_px, elevation_deg=elevation), estimate, []
 
 
 def running_rate(analysis: Analysis, step_s: float | None = None) -> pd.DataFrame:

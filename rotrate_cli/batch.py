@@ -21,6 +21,7 @@ import pandas as pd
 
 from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze
 from rotrate_cli.errors import InputError, NoResultError, RotrateError
+from rotrate_cli.focal import parse_fov
 
 VIDEO_SUFFIXES = frozenset({".mp4", ".mov", ".avi", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"})
 SUMMARY_COLUMNS = ("file", "status", "omega", "omega_low", "omega_high", "rpm", "direction", "tracks_used", "error")
@@ -217,7 +218,7 @@ MANIFEST_OPTIONAL = ("fixation", "fov", "focal_px", "fps", "axis_angle", "angle_
 
 def read_manifest(path: Path, base: AnalysisConfig) -> list[Job]:
     """The jobs of a ``rotrate check`` manifest: a CSV with ``file, expected_omega,
-    tolerance_pct`` and optionally ``fixation`` (``X,Y`` or ``auto``, the default), ``fov``,
+    tolerance_pct`` and optionally ``fixation`` (``X,Y`` or ``auto``, the default), ``fov`` (degrees or ``auto``),
     ``focal_px``, ``fps``, ``axis_angle``, ``angle_from``, ``elevation``, ``every``, ``method``,
     ``start``, ``end``. Files are relative to the manifest's folder.
 
@@ -280,8 +281,10 @@ def _manifest_job(path: Path, line: int, row: dict[str, str], base: AnalysisConf
             raise InputError(f"{where}: fixation must be X,Y or auto; got {fixation_text!r}")
     every = number("every", 1)
     end = number("end")
+    fov_deg, find_focal = parse_fov(row.get("fov", "") or None, where)
     config = replace(
-        base, fixation_px=fixation, fov_deg=number("fov"), focal_px=number("focal_px"), fps=number("fps"),
+        base, fixation_px=fixation, fov_deg=fov_deg, find_focal=find_focal, focal_px=number("focal_px"),
+        fps=number("fps"),
         axis_angle_deg=number("axis_angle"), angle_from=row.get("angle_from", "") or base.angle_from,
         elevation_deg=number("elevation"), every=int(every or 1), method=row.get("method", "") or base.method,
         start_s=number("start", 0.0) or 0.0, end_s=end,

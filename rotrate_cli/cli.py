@@ -47,6 +47,7 @@ from rotrate_cli.batch import (
 )
 from rotrate_cli.decode import FrameSource
 from rotrate_cli.errors import InputError, OutputError, RotrateError
+from rotrate_cli.focal import parse_fov
 from rotrate_cli.outputs import check_output_path, write_text
 from rotrate_cli.overlay import draw_axis, draw_grid, frame_at, write_image, write_overlay
 from rotrate_cli.plots import write_plot
@@ -185,8 +186,10 @@ def analyze_command(
     roi: Annotated[str | None, typer.Option("--roi", help="X,Y,W,H: seed points only in this box.")] = None,
     every: EveryOption = 1,
     method: MethodOption = "fit",
-    fov: Annotated[float | None, typer.Option("--fov", help="Horizontal field of view, degrees: corrects "
-                                                            "for perspective (pinhole camera).")] = None,
+    fov: Annotated[str | None, typer.Option("--fov", help="Horizontal field of view, degrees: corrects "
+                                                          "for perspective (pinhole camera); auto: found "
+                                                          "from the tracks (with the camera's elevation).")
+                   ] = None,
     focal_px: Annotated[float | None, typer.Option("--focal-px", help="Focal length in pixels, instead of "
                                                                       "--fov.")] = None,
     axis_angle: Annotated[float | None, typer.Option("--axis-angle", help="Axis angle in the image, degrees (0 "
@@ -264,11 +267,13 @@ def analyze_command(
             if window is None:
                 raise InputError("--series-csv needs --window SECONDS")
             check_output_path(series_csv_path, force)
+        fov_deg, find_focal = parse_fov(fov)
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
                                 axis_angle_deg=axis_angle, angle_from=angle_from, elevation_deg=elevation,
                                 window_s=window, start_s=start,
                                 end_s=end, every=every,
-                                method=method, fov_deg=fov, focal_px=focal_px, tracker=tracker, segment=segment,
+                                method=method, fov_deg=fov_deg, focal_px=focal_px, find_focal=find_focal,
+                                tracker=tracker, segment=segment,
                                 keep_tracks=overlay is not None,
                                 points_px=tuple((x, y) for x, y in (_numbers(t, 2, "--track", "320,180")
                                                                     for t in track or [])),

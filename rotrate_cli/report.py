@@ -26,6 +26,14 @@ FORMATS = ("table", "csv", "json")
 TABLE_ROWS = 25  # features listed in the terminal table; the CSV and JSON have them all
 
 
+def _elevation_text(analysis: Analysis) -> str:
+    """The camera's found elevation: its sign is told only where perspective was seen."""
+    if analysis.focal is not None and math.isfinite(analysis.focal.focal_px):
+        looking = "down on" if analysis.elevation_deg >= 0 else "up at"
+        return f"; camera looks {looking} it by {abs(analysis.elevation_deg):.0f} deg"
+    return f"; camera elevation {analysis.elevation_deg:.0f} deg, up or down"
+
+
 def _number(value: float, digits: int = 6) -> float | None:
     return None if value is None or not math.isfinite(value) else round(float(value), digits)
 
@@ -85,6 +93,13 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "angle_found": analysis.axis_angle_found,
             "angle_from": analysis.axis_angle_from if analysis.axis_angle_found else None,
             "elevation_deg": _number(analysis.elevation_deg, 2),
+        },
+        "camera": None if analysis.focal is None else {
+            "found": True,
+            "focal_px": _number(analysis.focal.focal_px, 1) if math.isfinite(analysis.focal.focal_px) else None,
+            "fov_deg": _number(analysis.focal.fov_deg, 2),
+            "orthographic": not math.isfinite(analysis.focal.focal_px),
+            "tracks": analysis.focal.tracks,
         },
         "omega": _number(analysis.omega_rad_s),
         "omega_low": _number(analysis.omega_low_rad_s),
@@ -146,8 +161,11 @@ def render_table(analysis: Analysis, console: Console) -> None:
         summary.add_row("axis", f"{analysis.axis_angle_deg:+.2f} deg from vertical (top end "
                         f"{'right' if analysis.axis_angle_deg >= 0 else 'left'})"
                         + (f"  (found from the {analysis.axis_angle_from})" if analysis.axis_angle_found else "")
-                        + ("" if math.isnan(analysis.elevation_deg)
-                           else f"; camera elevation {analysis.elevation_deg:.0f} deg, up or down"))
+                        + ("" if math.isnan(analysis.elevation_deg) else _elevation_text(analysis)))
+    if analysis.focal is not None:
+        summary.add_row("camera", "no perspective seen: orthographic" if not math.isfinite(analysis.focal.focal_px)
+                        else f"found: focal {analysis.focal.focal_px:.0f} px (field of view "
+                        f"{analysis.focal.fov_deg:.1f} deg), from {analysis.focal.tracks} tracks")
     summary.add_row("frames", f"{analysis.frames} over {analysis.duration_s:.2f} s at {analysis.fps:g} fps")
     reasons = Counter(r for r in analysis.features["reason"] if r)
     rejected = ", ".join(f"{n} {why}" for why, n in reasons.most_common()) or "none"

@@ -1,0 +1,299 @@
+"""The camera's focal length (and elevation) from the tracks themselves: ``--fov auto``.
+
+Orthographic offsets alone say little about perspective: a nearer or farther camera changes the
+shape of each track's horizontal motion only at second order, and on partial arcs that is
+confounded with the rate (a misfit-driven search put a 25-degree lens at 40 degrees). The
+vertical motion says it at first order. Seen through a pinhole, a point's image row is
+``f Y / Z``: as the point turns towards the camera its depth ``Z`` shrinks and its row moves
+away from the principal point, by its height over the distance, in step with its nearness. A
+track near the top of the object bobs up as it passes in front, one near the bottom bobs down;
+orthographically neither moves. So the rows' motion, against each track's height in the image,
+measures ``1 / f``.
+
+The model is the whole rigid motion. In pixel units at the axis's depth (the camera at
+distance ``f`` from the axis point ``A``, which projects to the fixation point), each track is
+a point at height ``Y`` along the axis direction ``u`` and at ``(a, b)`` in the plane of turning:
+
+    P(t) = A + Y u + e1 (a cos wt - b sin wt) + e2 (a sin wt + b cos wt),
+    image offset from the principal point = P_xy / (1 + g P_z'),
+
+with ``g = 1 / f`` (0 is orthographic, so the fit passes smoothly through it), ``P_z'`` the
+depth relative to the axis point, ``e1`` the image direction in which offsets are measured, and
+``u`` and ``e2`` leaning by the camera's elevation ``eps``. The shared unknowns are ``g``,
+``eps`` and ``w``; each track has ``Y, a, b``. They are fitted to both image coordinates of
+every sample by sparse nonlinear least squares (a soft-L1 loss, then the worst-fitting tracks
+dropped and the fit repeated: a track that slid along the object shows as vertical misfit).
+The principal point is taken at the image centre.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import least_squares
+from scipy.sparse import lil_matrix
+
+from rotrate_cli.axis import unit_offset
+from rotrate_cli.errors import InputError
+
+#: Tracks and samples per track the fit uses: the longest tracks, evenly thinned. The shared
+#: unknowns are three; more data than this narrows them little and costs time.
+MAX_TRACKS = 160
+MAX_SAMPLES_PER_TRACK = 24
+#: A track must turn through this much (rad) to say anything about its ellipse.
+MIN_TURN_RAD = 0.3
+#: Samples whose offset across the line of sight exceeds this fraction of their radius (turned
+#: more than 55 degrees from facing the camera) are left out after the first fit.
+FACE_ON_LATERAL = 0.82
+#: Unknowns shared by all tracks: inverse focal length, elevation, rate, and the axis's angle.
+SHARED = 4
+#: Focal lengths longer than this many image widths (a field of view under 8.2 degrees) are
+#: reported as orthographic: the trackers' own small biases look like that much perspective (an
+#: orthographic rendered sphere came out at 4.6 degrees, which moved its omega by -1.8%), and a
+#: lens that long changes omega by little more.
+ORTHOGRAPHIC_WIDTHS = 7.0
+
+
+@dataclass(frozen=True)
+class FocalEstimate:
+    """What the tracks say about the camera (see the module's notes).
+
+    Attributes:
+        focal_px: the focal length in pixels; ``inf`` when the view is indistinguishable from
+            orthographic (the inverse focal length is not clearly above zero).
+        fov_deg: the horizontal field of view that focal length gives on this frame width.
+        inverse_focal: ``1 / focal_px`` as fitted (may be slightly negative on an orthographic
+            view), and ``inverse_focal_se`` its standard error.
+        elevation_deg: how far the camera looks down on the axis (negative: up at it).
+        tracks: tracks in the final fit.
+        rms_px: root-mean-square misfit of those tracks' positions, pixels.
+    """
+
+    focal_px: float
+    fov_deg: float
+    inverse_focal: float
+    inverse_focal_se: float
+    elevation_deg: float
+    tracks: int
+    rms_px: float
+
+
+def parse_fov(text: str | None, where: str = "--fov") -> tuple[float | None, bool]:
+    """``--fov``'s value: degrees, ``auto`` (find it: ``(None, True)``), or None (not given).
+
+    Raises:
+        InputError: anything else.
+    """
+    if text is None:
+        return None, False
+    if text.strip().lower() == "auto":
+        return None, True
+    try:
+        return float(text), False
+    except ValueError:
+        raise InputError(f"{where}: the field of view must be degrees or auto; got {text!r}") from None
+
+
+def _choose(tracks: pd.DataFrame, omega_rad_s: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """The longest tracks that turn through MIN_TURN_RAD, each as (time, x, y) thinned evenly."""
+    track = tracks["track"].to_numpy()
+    starts = np.flatnonzero(np.r_[True, track[1:] != track[:-1]])
+    ends = np.r_[starts[1:], len(track)]
+    time_s = tracks["time_s"].to_numpy(dtype=np.float64)
+    x, y = tracks["x_px"].to_numpy(dtype=np.float64), tracks["y_px"].to_numpy(dtype=np.float64)
+    span = time_s[ends - 1] - time_s[starts]
+    order = np.argsort(-span, kind="stable")
+    chosen = []
+    for i in order[:MAX_TRACKS]:
+        if abs(omega_rad_s) * span[i] < MIN_TURN_RAD or ends[i] - starts[i] < 6:
+            break
+        rows = np.unique(np.linspace(starts[i], ends[i] - 1, MAX_SAMPLES_PER_TRACK).round().astype(int))
+        chosen.append((time_s[rows], x[rows], y[rows]))
+    return chosen
+
+
+class _Model:
+    """The rigid-turn pinhole model over a fixed set of tracks (see the module's notes)."""
+
+    def __init__(self, chosen: list[tuple[np.ndarray, np.ndarray, np.ndarray]], centre_px: np.ndarray,
+                 axis_px: np.ndarray, angle_deg: float) -> None:
+        self.counts = np.array([len(t) for t, _, _ in chosen])
+        self.owner = np.repeat(np.arange(len(chosen)), self.counts)
+        time_s = np.concatenate([t for t, _, _ in chosen])
+        self.time_s = time_s - time_s.mean()
+        # positions relative to the principal point
+        self.observed = np.stack([np.concatenate([x for _, x, _ in chosen]),
+                                  np.concatenate([y for _, _, y in chosen])], axis=1) - centre_px
+        self.centre_px = centre_px
+        self.axis_px = axis_px  # the axis point, relative to the principal point
+        self.angle_rad = math.radians(angle_deg)
+
+    @staticmethod
+    def frame(elevation_rad: float, angle_rad: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The image direction ``e1`` in which offsets are measured, the axis direction ``u``
+        (its top end) and the in-plane direction ``e2``, for an elevation and an image angle."""
+        ux, uy = unit_offset(math.degrees(angle_rad))
+        e1 = np.array([ux, uy, 0.0])
+        up = np.array([math.cos(elevation_rad) * uy, -math.cos(elevation_rad) * ux, -math.sin(elevation_rad)])
+        return e1, up, np.cross(up, e1)
+
+    def predict(self, params: np.ndarray) -> np.ndarray:
+        g, elevation, omega, angle = params[:SHARED]
+        per_track = params[SHARED:].reshape(-1, 3)[self.owner]
+        height, a, b = per_track[:, 0], per_track[:, 1], per_track[:, 2]
+        e1, up, e2 = self.frame(elevation, angle)
+        c, s = np.cos(omega * self.time_s), np.sin(omega * self.time_s)
+        along1, along2 = a * c - b * s, a * s + b * c
+        point = height[:, None] * up + along1[:, None] * e1 + along2[:, None] * e2
+        depth = 1.0 + g * point[:, 2]
+        depth = np.where(depth > 0.05, depth, 0.05)
+        return (self.axis_px + point[:, :2]) / depth[:, None]
+
+    def lateral_fraction(self, params: np.ndarray) -> np.ndarray:
+        """Each sample's offset across the line of sight as a fraction of its radius: |sin| of
+        its angle from facing the camera (1 at the object's outline)."""
+        omega = params[2]
+        per_track = params[SHARED:].reshape(-1, 3)[self.owner]
+        a, b = per_track[:, 1], per_track[:, 2]
+        c, s = np.cos(omega * self.time_s), np.sin(omega * self.time_s)
+        return np.abs(a * c - b * s) / np.maximum(np.hypot(a, b), 1e-9)
+
+    def residuals(self, params: np.ndarray) -> np.ndarray:
+        return (self.predict(params) - self.observed).ravel()
+
+    def sparsity(self) -> lil_matrix:
+        tracks = len(self.counts)
+        pattern = lil_matrix((2 * len(self.owner), SHARED + 3 * tracks), dtype=np.int8)
+        rows = np.arange(2 * len(self.owner))
+        pattern[:, :SHARED] = 1
+        owner2 = np.repeat(self.owner, 2)
+        for k in range(3):
+            pattern[rows, SHARED + 3 * owner2 + k] = 1
+        return pattern
+
+    def linear_start(self, elevation: float, omega: float) -> np.ndarray:
+        """Per-track ``Y, a, b`` by linear least squares with ``g = 0`` (orthographic)."""
+        e1, up, e2 = self.frame(elevation, self.angle_rad)
+        c, s = np.cos(omega * self.time_s), np.sin(omega * self.time_s)
+        centred = self.observed - self.axis_px
+        start = np.zeros((len(self.counts), 3))
+        bounds = np.r_[0, np.cumsum(self.counts)]
+        for k in range(len(self.counts)):
+            rows = slice(bounds[k], bounds[k + 1])
+            # columns: Y -> up_xy; a -> e1 c + e2 s; b -> -e1 s + e2 c (xy parts)
+            design = np.stack([
+                np.broadcast_to(up[:2], (rows.stop - rows.start, 2)),
+                c[rows, None] * e1[:2] + s[rows, None] * e2[:2],
+                -s[rows, None] * e1[:2] + c[rows, None] * e2[:2],
+            ], axis=2).reshape(-1, 3)
+            start[k] = np.linalg.lstsq(design, centred[rows].ravel(), rcond=None)[0]
+        return start.ravel()
+
+
+def estimate_focal(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg: float,
+                   omega_rad_s: float, size_px: tuple[int, int], elevation_deg: float = 0.0) -> FocalEstimate | None:
+    """The focal length and elevation that best explain the tracks' rigid turning (see the
+    module's notes); None when too few tracks turn far enough.
+
+    ``tracks``: ``track, time_s, x_px, y_px`` sorted by track then time, on one body;
+    ``omega_rad_s``: a first rate (its sign is free here); ``elevation_deg``: a first guess.
+    With perspective seen, the sense of turning and so the sign of the elevation are told
+    (positive: the camera looks down); on an orthographic view the sign is not.
+    """
+    chosen = _choose(tracks, omega_rad_s)
+    if len(chosen) < 8:
+        return None
+    width_px, height_px = size_px
+    centre = np.array([width_px / 2.0 - 0.5, height_px / 2.0 - 0.5])
+    model = _Model(chosen, centre, np.asarray(fixation_px, dtype=np.float64) - centre, angle_deg)
+    best = None
+    for sign in (1.0, -1.0):  # orthographically, (elevation, omega) and (-elevation, -omega) agree
+        elevation = math.radians(elevation_deg) * sign
+        omega = abs(omega_rad_s) * sign
+        start = np.r_[0.0, elevation, omega, model.angle_rad, model.linear_start(elevation, omega)]
+        fit = least_squares(model.residuals, start, jac_sparsity=model.sparsity(), bounds=_bounds(len(chosen)),
+                            loss="soft_l1", f_scale=1.0, x_scale="jac", max_nfev=60)
+        if best is None or fit.cost < best.cost:
+            best = fit
+    assert best is not None
+    # keep to the parts of each turn seen face on: near the object's outline a surface is seen
+    # edge on, and the tracker's window there slides along it (on a rendered cylinder through a
+    # 40-degree lens, the tracks that ran into the outline bobbed half as much as they should
+    # have, and put the focal length 27% long)
+    lateral = model.lateral_fraction(best.x)
+    chosen, kept_tracks = _trim(chosen, lateral <= FACE_ON_LATERAL, model.owner)
+    if len(chosen) < 8:
+        return None
+    params = np.r_[best.x[:SHARED], best.x[SHARED:].reshape(-1, 3)[kept_tracks].ravel()]
+    model = _Model(chosen, centre, model.axis_px, angle_deg)
+    best = least_squares(model.residuals, params, jac_sparsity=model.sparsity(), bounds=_bounds(len(chosen)),
+                         loss="soft_l1", f_scale=1.0, x_scale="jac", max_nfev=60)
+    # drop the tracks that fit worst (slid along the surface, or off the body) and fit again
+    misfit = np.sqrt(np.bincount(model.owner, (best.fun.reshape(-1, 2) ** 2).sum(axis=1)) / model.counts)
+    keep = misfit <= max(3.0 * float(np.median(misfit)), 0.5)
+    if keep.sum() < len(chosen) and keep.sum() >= 8:
+        chosen = [track for track, kept in zip(chosen, keep, strict=True) if kept]
+        params = np.r_[best.x[:SHARED], best.x[SHARED:].reshape(-1, 3)[keep].ravel()]
+        model = _Model(chosen, centre, model.axis_px, angle_deg)
+        best = least_squares(model.residuals, params, jac_sparsity=model.sparsity(), bounds=_bounds(len(chosen)),
+                             loss="linear", x_scale="jac", max_nfev=60)
+    residual = best.fun
+    dof = max(len(residual) - len(best.x), 1)
+    sigma2 = float(residual @ residual) / dof
+    se = _shared_standard_errors(best.jac, np.repeat(model.owner, 2), sigma2)
+    g, elevation = float(best.x[0]), math.degrees(float(best.x[1]))
+    g_se = se[0]
+    focal = 1.0 / g if g > 0 and g > 2.0 * g_se and 1.0 / g < ORTHOGRAPHIC_WIDTHS * width_px else math.inf
+    fov = 2.0 * math.degrees(math.atan((width_px / 2.0) / focal)) if math.isfinite(focal) else 0.0
+    return FocalEstimate(focal, fov, g, g_se, elevation, len(chosen),
+                         math.sqrt(float(residual @ residual) / len(residual)))
+
+
+def _trim(chosen: list[tuple[np.ndarray, np.ndarray, np.ndarray]], keep: np.ndarray,
+          owner: np.ndarray) -> tuple[list[tuple[np.ndarray, np.ndarray, np.ndarray]], np.ndarray]:
+    """The tracks with only their ``keep`` samples, those left with at least 6; and which
+    tracks those are."""
+    bounds = np.r_[0, np.cumsum(np.bincount(owner, minlength=len(chosen)))]
+    trimmed, kept = [], np.zeros(len(chosen), bool)
+    for k, (time_s, x, y) in enumerate(chosen):
+        mask = keep[bounds[k]:bounds[k + 1]]
+        if mask.sum() >= 6:
+            trimmed.append((time_s[mask], x[mask], y[mask]))
+            kept[k] = True
+    return trimmed, kept
+
+
+def _bounds(tracks: int) -> tuple[np.ndarray, np.ndarray]:
+    """The inverse focal length is not negative; nothing else is bounded."""
+    lower = np.full(SHARED + 3 * tracks, -np.inf)
+    lower[0] = 0.0
+    return lower, np.full(SHARED + 3 * tracks, np.inf)
+
+
+def _shared_standard_errors(jacobian, owner: np.ndarray, sigma2: float) -> np.ndarray:
+    """Standard errors of the three shared unknowns, with the per-track unknowns eliminated
+    (Schur complement, track by track): ``owner`` gives each residual's track."""
+    jacobian = jacobian.tocsr() if hasattr(jacobian, "tocsr") else np.asarray(jacobian)
+    shared = (np.asarray(jacobian[:, :SHARED].todense()) if hasattr(jacobian, "todense")
+              else jacobian[:, :SHARED])
+    reduced = shared.T @ shared
+    bounds = np.r_[0, np.flatnonzero(np.diff(owner)) + 1, len(owner)]
+    for k in range(len(bounds) - 1):
+        rows = slice(bounds[k], bounds[k + 1])
+        block = jacobian[rows, SHARED + 3 * k:SHARED + 3 + 3 * k]
+        b = np.asarray(block.todense()) if hasattr(block, "todense") else block
+        s = shared[rows]
+        normal_ll = b.T @ b
+        cross = s.T @ b
+        try:
+            reduced -= cross @ np.linalg.solve(normal_ll, cross.T)
+        except np.linalg.LinAlgError:
+            continue
+    try:
+        covariance = np.linalg.inv(reduced) * sigma2
+    except np.linalg.LinAlgError:
+        return np.full(SHARED, math.inf)
+    return np.sqrt(np.clip(np.diag(covariance), 0.0, None))

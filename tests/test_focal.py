@@ -1,0 +1,128 @@
+"""--fov auto: the focal length and elevation from the tracks (rotrate_cli.focal)."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from rotrate_cli import AnalysisConfig, analyze
+from rotrate_cli.errors import InputError
+from rotrate_cli.focal import estimate_focal, parse_fov
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_videos"
+SIZE = (640, 360)
+
+
+def _pinhole_tracks(focal_px: float | None, elevation_deg: float, omega: float = 0.5, seed: int = 0) -> pd.DataFrame:
+    """Points on a turning body (100 px per unit at the axis), seen by a camera at the axis
+    point's depth looking down by ``elevation_deg`` (None focal: orthographic), each kept
+    while it faces the camera, with 0.05 px of noise. Independent of the module's algebra:
+    world points are rotated, then moved into the camera's frame and projected."""
+    rng = np.random.default_rng(seed)
+    fps, frames = 30.0, 150
+    time_s = np.arange(frames) / fps
+    scale = 100.0
+    distance = (focal_px if focal_px is not None else 1e9) / scale  # world units to the axis point
+    tilt = math.radians(elevation_deg)
+    # camera frame: x right, y down, z forward; looking down by tilt at the axis point (origin)
+    rows = []
+    for k in range(300):
+        radius, height, start = rng.uniform(0.6, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(0, 2 * math.pi)
+        angle = start + omega * time_s
+        world = np.stack([radius * np.sin(angle), height * np.ones_like(angle), radius * np.cos(angle)], axis=1)
+        # world: x right, y up, z towards the camera; camera above, looking down by tilt
+        cam_x = world[:, 0]
+        cam_y = -(world[:, 1] * math.cos(tilt) - world[:, 2] * math.sin(tilt))
+        cam_z = distance - (world[:, 2] * math.cos(tilt) + world[:, 1] * math.sin(tilt))
+        facing = np.cos(angle) > 0.2
+        if focal_px is None:
+            u, v = scale * cam_x, scale * cam_y
+        else:
+            u, v = focal_px * cam_x / cam_z, focal_px * cam_y / cam_z
+        index = np.flatnonzero(facing)
+        if len(index) < 10:
+            continue
+        breaks = np.flatnonzero(np.diff(index) > 1)
+        index = index[: breaks[0] + 1] if len(breaks) else index
+        for i in index:
+            rows.append((k, time_s[i], 319.5 + u[i] + rng.normal(0, 0.05), 179.5 + v[i] + rng.normal(0, 0.05)))
+    return pd.DataFrame(rows, columns=["track", "time_s", "x_px", "y_px"])
+
+
+@pytest.mark.parametrize("fov_deg, elevation_deg", [(40.0, 0.0), (25.0, 0.0), (30.0, 20.0)])
+def test_focal_and_elevation_recovered_from_exact_pinhole_tracks(fov_deg: float, elevation_deg: float) -> None:
+    focal = (SIZE[0] / 2) / math.tan(math.radians(fov_deg) / 2)
+    tracks = _pinhole_tracks(focal, elevation_deg)
+    found = estimate_focal(tracks, (319.5, 179.5), 0.0, 0.55, SIZE, 0.0)
+    assert found is not None
+    assert found.focal_px == pytest.approx(focal, rel=0.03)
+    assert found.fov_deg == pytest.approx(fov_deg, rel=0.03)
+    assert found.elevation_deg == pytest.approx(elevation_deg, abs=1.0)
+
+
+def test_orthographic_tracks_show_no_perspective() -> None:
+    found = estimate_focal(_pinhole_tracks(None, 10.0), (319.5, 179.5), 0.0, 0.5, SIZE, 0.0)
+    assert found is not None
+    assert math.isinf(found.focal_px) and found.fov_deg == 0.0
+    assert abs(found.elevation_deg) == pytest.approx(10.0, abs=1.0)  # its sign is not told orthographically
+
+
+def test_too_few_tracks_give_none() -> None:
+    tracks = _pinhole_tracks(900.0, 0.0)
+    few = tracks[tracks["track"].isin(tracks["track"].unique()[:5])]
+    assert estimate_focal(few, (319.5, 179.5), 0.0, 0.5, SIZE) is None
+
+
+def test_parse_fov() -> None:
+    assert parse_fov(None) == (None, False)
+    assert parse_fov("auto") == (None, True)
+    assert parse_fov(" AUTO ") == (None, True)
+    assert parse_fov("25") == (25.0, False)
+    with pytest.raises(InputError, match="degrees or auto"):
+        parse_fov("wide")
+
+
+def test_perspective_sample_without_its_field_of_view() -> None:
+    """box_perspective.mp4 (25-degree lens): orthographic reads about +7%; found, within 1%."""
+    truth = json.loads((SAMPLES / "box_perspective.json").read_text())
+    result = analyze(SAMPLES / "box_perspective.mp4", AnalysisConfig(fixation_px=tuple(truth["fixation_px"]),
+                                                                     find_focal=True))
+    assert result.focal is not None
+    assert result.focal.fov_deg == pytest.approx(25.0, rel=0.1)
+    assert result.omega_rad_s == pytest.approx(truth["omega_rad_s"], rel=0.01)
+    assert result.direction == truth["direction"]
+    assert result.method.startswith("fit+pinhole")
+
+
+def test_orthographic_sample_stays_orthographic() -> None:
+    truth = json.loads((SAMPLES / "box_ortho.json").read_text())
+    config = AnalysisConfig(fixation_px=tuple(truth["fixation_px"]))
+    found = analyze(SAMPLES / "box_ortho.mp4", AnalysisConfig(fixation_px=tuple(truth["fixation_px"]),
+                                                              find_focal=True))
+    assert found.focal is not None and math.isinf(found.focal.focal_px)
+    assert found.method == "fit"
+    assert found.omega_rad_s == pytest.approx(analyze(SAMPLES / "box_ortho.mp4", config).omega_rad_s, rel=1e-9)
+
+
+def _rotrate(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "rotrate_cli", *args], capture_output=True, text=True)
+
+
+def test_cli_fov_auto_json_and_bad_values() -> None:
+    done = _rotrate("analyze", str(SAMPLES / "box_perspective.mp4"), "--fixation", "319.5,179.5", "--fov", "auto",
+                    "-f", "json")
+    assert done.returncode == 0, done.stderr
+    camera = json.loads(done.stdout)["camera"]
+    assert camera["found"] and not camera["orthographic"]
+    assert camera["fov_deg"] == pytest.approx(25.0, rel=0.1)
+    for bad in (["--fov", "wide"], ["--fov", "auto", "--focal-px", "900"], ["--fov", "auto", "--method", "paper"]):
+        done = _rotrate("analyze", str(SAMPLES / "box_perspective.mp4"), "--fixation", "319.5,179.5", *bad)
+        assert done.returncode == 2
+        assert len(done.stderr.strip().splitlines()) == 1 and "Traceback" not in done.stderr
