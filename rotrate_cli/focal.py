@@ -214,8 +214,7 @@ def estimate_focal(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle
         elevation = math.radians(elevation_deg) * sign
         omega = abs(omega_rad_s) * sign
         start = np.r_[0.0, elevation, omega, model.angle_rad, model.linear_start(elevation, omega)]
-        fit = least_squares(model.residuals, start, jac_sparsity=model.sparsity(), bounds=_bounds(len(chosen)),
-                            loss="soft_l1", f_scale=1.0, x_scale="jac", max_nfev=60)
+        fit = _fit(model, start, "soft_l1")
         if best is None or fit.cost < best.cost:
             best = fit
     assert best is not None
@@ -229,8 +228,7 @@ def estimate_focal(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle
         return None
     params = np.r_[best.x[:SHARED], best.x[SHARED:].reshape(-1, 3)[kept_tracks].ravel()]
     model = _Model(chosen, centre, model.axis_px, angle_deg)
-    best = least_squares(model.residuals, params, jac_sparsity=model.sparsity(), bounds=_bounds(len(chosen)),
-                         loss="soft_l1", f_scale=1.0, x_scale="jac", max_nfev=60)
+    best = _fit(model, params, "soft_l1")
     # drop the tracks that fit worst (slid along the surface, or off the body) and fit again
     misfit = np.sqrt(np.bincount(model.owner, (best.fun.reshape(-1, 2) ** 2).sum(axis=1)) / model.counts)
     keep = misfit <= max(3.0 * float(np.median(misfit)), 0.5)
@@ -238,8 +236,7 @@ def estimate_focal(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle
         chosen = [track for track, kept in zip(chosen, keep, strict=True) if kept]
         params = np.r_[best.x[:SHARED], best.x[SHARED:].reshape(-1, 3)[keep].ravel()]
         model = _Model(chosen, centre, model.axis_px, angle_deg)
-        best = least_squares(model.residuals, params, jac_sparsity=model.sparsity(), bounds=_bounds(len(chosen)),
-                             loss="linear", x_scale="jac", max_nfev=60)
+        best = _fit(model, params, "linear")
     residual = best.fun
     dof = max(len(residual) - len(best.x), 1)
     sigma2 = float(residual @ residual) / dof
@@ -266,11 +263,13 @@ def _trim(chosen: list[tuple[np.ndarray, np.ndarray, np.ndarray]], keep: np.ndar
     return trimmed, kept
 
 
-def _bounds(tracks: int) -> tuple[np.ndarray, np.ndarray]:
-    """The inverse focal length is not negative; nothing else is bounded."""
-    lower = np.full(SHARED + 3 * tracks, -np.inf)
+def _fit(model: _Model, params: np.ndarray, loss: str):
+    """One sparse least-squares fit of ``model`` from ``params``; the inverse focal length is
+    bounded below by 0, nothing else is bounded. ``loss``: ``soft_l1`` (1 px scale) or ``linear``."""
+    lower = np.full(len(params), -np.inf)
     lower[0] = 0.0
-    return lower, np.full(SHARED + 3 * tracks, np.inf)
+    return least_squares(model.residuals, params, jac_sparsity=model.sparsity(), bounds=(lower, np.inf),
+                         loss=loss, f_scale=1.0, x_scale="jac", max_nfev=60)
 
 
 def _shared_standard_errors(jacobian, owner: np.ndarray, sigma2: float) -> np.ndarray:
