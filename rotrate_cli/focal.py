@@ -33,8 +33,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import least_squares
-from scipy.sparse import lil_matrix
 
 from rotrate_cli.axis import unit_offset
 from rotrate_cli.errors import InputError
@@ -164,7 +162,9 @@ class _Model:
     def residuals(self, params: np.ndarray) -> np.ndarray:
         return (self.predict(params) - self.observed).ravel()
 
-    def sparsity(self) -> lil_matrix:
+    def sparsity(self):  # a scipy.sparse.lil_matrix
+        from scipy.sparse import lil_matrix  # scipy is imported only when the focal length is sought
+
         tracks = len(self.counts)
         pattern = lil_matrix((2 * len(self.owner), SHARED + 3 * tracks), dtype=np.int8)
         rows = np.arange(2 * len(self.owner))
@@ -266,6 +266,8 @@ def _trim(chosen: list[tuple[np.ndarray, np.ndarray, np.ndarray]], keep: np.ndar
 def _fit(model: _Model, params: np.ndarray, loss: str):
     """One sparse least-squares fit of ``model`` from ``params``; the inverse focal length is
     bounded below by 0, nothing else is bounded. ``loss``: ``soft_l1`` (1 px scale) or ``linear``."""
+    from scipy.optimize import least_squares  # imported here: it weighs on every run's start otherwise
+
     lower = np.full(len(params), -np.inf)
     lower[0] = 0.0
     return least_squares(model.residuals, params, jac_sparsity=model.sparsity(), bounds=(lower, np.inf),
