@@ -1,0 +1,328 @@
+"""The rotation period from the clip's own repetition: how long until the picture comes back.
+
+A rigid body turning at a steady rate looks the same again after each full turn, whatever the
+camera, the lens, the view or where the axis lies, and whatever its surfaces do: mirrors,
+grooves and glints repeat with the turn too. So when a clip spans about a turn or more, the
+time after which each frame is seen again measures the rate with no model of the projection
+at all. This is how the record clip's own truth was measured (frame t matches frame t + L at
+L = k x 42.427 frames for k = 1..16).
+
+Every frame is reduced to a small grey thumbnail (:class:`Thumbnails`, a tap on the frame
+stream); the pixels' mean over the clip is removed, so the static background drops out, and the
+squared difference of every pair of frames comes from one matrix product. Near a pair of frames
+whose times differ by ``k`` periods (or a bit more or less), their difference grows with the
+mismatch as a frame's difference from its own neighbours grows with the time between them. So
+for a period ``P`` each such pair predicts its difference from its two frames' own neighbours
+(a local, measured shape: views differ in how much they change per degree), and ``P`` is the
+one that predicts best. A single closing of the turn is enough: a sequence of photographs of one
+full turn, whose last frame is a step before its first (the dinosaur's 36 frames, the EPFL cars),
+gives the period from the few pairs across the wrap, to a fraction of a frame.
+
+Times are the frames' own (:attr:`rotrate_cli.decode.Frame.time_s`): photographs taken at
+irregular moments of a steadily turning table are placed by their capture times.
+
+An object with an m-fold symmetry (a fan's blades, spokes) repeats m times a turn; the period
+found is then a fraction of the turn, and the tracks' own rate tells which fraction
+(:func:`harmonic`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from rotrate_cli.decode import Frame
+
+#: The thumbnails' longer side, pixels: the whole picture's repetition needs little detail, and
+#: the pairwise differences cost the square of the frame count times this squared.
+THUMB_SIDE_PX = 64
+#: At most this many frames (the first ones analysed) are kept: 2000 thumbnails are 8 MB and
+#: their differences 16 MB; a period is measured within them.
+MAX_FRAMES = 2000
+#: Pairs of frames whose difference is under this fraction of the typical one look alike.
+ALIKE = 0.5
+#: A frame's neighbours describe how fast its picture changes, up to this many each side.
+MAX_NEIGHBOURS = 8
+#: The best-matching pairs must differ by at most this fraction of what their frames differ
+#: from their farthest neighbours, and the fit must prefer the period by this much (1 - the
+#: cost there over the worst cost a few frames off).
+CONTRAST = 0.6
+MIN_FIT = 0.3
+#: Residuals of the differences (in typical differences) are capped here in the fit.
+CAP = 0.3
+#: Points of the tabulated neighbour shape; period candidates scanned coarsely, then finely.
+SHAPE_POINTS = 48
+COARSE_POINTS = 81
+FINE_POINTS = 41
+#: Even with a perfect fit, where a repetition falls between two frames is known only to a
+#: fraction of a frame's step (photographs' steps are irregular): the interval's floor, in steps.
+RESOLUTION_STEPS = 0.4
+
+
+@dataclass(frozen=True)
+class Period:
+    """The clip's repetition (see the module's notes).
+
+    Attributes:
+        period_s: time between repetitions, seconds.
+        period_low_s, period_high_s: its 95% interval.
+        repeats: how many repetitions the clip spans (1: the turn closes once).
+        frames: thumbnails compared.
+        likeness: the difference of the best-matching pairs over the typical difference
+            (0: identical pictures); under :data:`ALIKE` to count.
+        fit: how sharply the period is preferred: 1 - its cost over the worst cost of the
+            periods a few frames off (0..1).
+        drift_s: the period measured on the clip's second half how far apart the periods of its first and second halves lie apart (a changing rate), seconds.
+    """
+
+    period_s: float
+    period_low_s: float
+    period_high_s: float
+    repeats: int
+    frames: int
+    likeness: float
+    fit: float
+    drift_s: float = 0.0
+
+    def omega_rad_s(self, multiple: int = 1) -> tuple[float, float, float]:
+        """The rate, and its 95% interval, if a turn takes ``multiple`` periods (rad/s)."""
+        turn = 2.0 * math.pi / multiple
+        return turn / self.period_s, turn / self.period_high_s, turn / self.period_low_s
+
+
+class Thumbnails:
+    """Collects a small grey thumbnail of each frame that passes through :meth:`tap`."""
+
+    def __init__(self, max_frames: int = MAX_FRAMES) -> None:
+        self._max = max_frames
+        self._images: list[np.ndarray] = []
+        self._times: list[float] = []
+
+    def tap(self, frames: Iterator[Frame]) -> Iterator[Frame]:
+        """Yield ``frames`` unchanged, keeping a thumbnail of each (grey or BGR images)."""
+        for frame in frames:
+            if len(self._images) < self._max:
+                self._add(frame.time_s, frame.image)
+            yield frame
+
+    def _add(self, time_s: float, image: np.ndarray) -> None:
+        if image.ndim == 3:
+            image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+        scale = THUMB_SIDE_PX / max(image.shape[:2])
+        small = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA) if scale < 1 else image
+        self._images.append(np.asarray(small, dtype=np.uint8).ravel())
+        self._times.append(float(time_s))
+
+    def clear(self) -> None:
+        self._images.clear()
+        self._times.clear()
+
+    @property
+    def times_s(self) -> np.ndarray:
+        return np.asarray(self._times, dtype=np.float64)
+
+    @property
+    def images(self) -> np.ndarray:
+        """One row of pixels per frame."""
+        return np.stack(self._images) if self._images else np.zeros((0, 0), np.uint8)
+
+
+def _differences(images: np.ndarray) -> np.ndarray:
+    """Squared differences of every pair of frames, after the pixels' mean is removed."""
+    values = images.astype(np.float32)
+    values -= values.mean(axis=0)
+    energy = np.einsum("ij,ij->i", values, values)
+    gram = values @ values.T
+    return np.maximum(energy[:, None] + energy[None, :] - 2.0 * gram, 0.0).astype(np.float64)
+
+
+def _lag_profile(diff: np.ndarray) -> np.ndarray:
+    """The mean difference of frames ``L`` apart, for every lag ``L`` (0 first)."""
+    return np.array([diff.diagonal(lag).mean() for lag in range(len(diff))])
+
+
+def _neighbour_shapes(diff: np.ndarray, times_s: np.ndarray, reach: int, grid_s: np.ndarray) -> np.ndarray:
+    """Each frame's difference from its neighbours against the time between them, tabulated on
+    ``grid_s`` (piecewise linear through the measured points and 0 at 0, made non-decreasing,
+    flat beyond the last): one row per frame."""
+    count = len(times_s)
+    shapes = np.empty((count, len(grid_s)))
+    for i in range(count):
+        near = [j for j in range(i - reach, i + reach + 1) if 0 <= j < count and j != i]
+        gaps = np.abs(times_s[near] - times_s[i])
+        values = diff[i, near]
+        order = np.argsort(gaps, kind="stable")
+        gaps = np.r_[0.0, gaps[order]]
+        values = np.maximum.accumulate(np.r_[0.0, values[order]])
+        shapes[i] = np.interp(grid_s, gaps, values)
+    return shapes
+
+
+def _robust_cost(residuals: np.ndarray) -> float:
+    """Mean squared residual, each capped at :data:`CAP`: pairs that differ for reasons of
+    their own (a person walking through one of the two frames) weigh no more than a miss."""
+    return float(np.mean(np.minimum(residuals ** 2, CAP ** 2)))
+
+
+def _candidates(profile: np.ndarray, reach: int, most: int = 6) -> list[float]:
+    """First periods in frames: the lags past the neighbours whose frames look alike and that
+    are local minima (valleys inside the clip), and the turn closing at the clip's end (its last
+    lags falling towards alike)."""
+    count = len(profile)
+    found: list[float] = []
+    for lag in range(reach + 1, count - 1):
+        lo, hi = max(reach + 1, lag - max(reach, 1)), min(count, lag + max(reach, 1) + 1)
+        if profile[lag] <= ALIKE and profile[lag] == profile[lo:hi].min():
+            found.append(float(lag))
+            if len(found) == most:
+                return found
+    tail = profile[max(reach + 1, count - 1 - reach):]
+    if len(tail) >= 1 and tail[-1] <= ALIKE and (len(tail) < 2 or tail[-1] < tail[0]):
+        found.append(float(count - 1))
+    return found
+
+
+def _repeats(profile: np.ndarray, lag0: float, reach: int) -> int:
+    """How many whole multiples of ``lag0`` (from the first on) still look alike in the lag
+    profile: a scene that drifts (a person moving behind) stops matching after a while."""
+    count, k = len(profile), 1
+    while True:
+        lag = (k + 1) * lag0
+        lo, hi = int(math.floor(lag - reach)), int(math.ceil(lag + reach)) + 1
+        if lo >= count or profile[max(lo, 0):min(hi, count)].min() > ALIKE:
+            return k
+        k += 1
+
+
+def find_period(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float = 0.0) -> Period | None:
+    """The time after which the clip's pictures repeat (see the module's notes); None when the
+    clip does not come back to a picture it has shown (under about a turn, or nothing turns).
+
+    ``times_s``: each frame's time; ``images``: one row of thumbnail pixels per frame;
+    ``clock_resolution_s``: how finely the times are known (widens the interval).
+
+    Every valley of the lag profile (and the closing of a single turn) is fitted; the period is
+    the shortest of those whose pictures match nearly as well as the best match: a turned car
+    half a turn on looks somewhat like itself, a record's label after 42 frames exactly so.
+    """
+    count = len(times_s)
+    if count < 8 or images.size == 0:
+        return None
+    steps = np.diff(times_s)
+    if not (steps > 0).all():
+        return None
+    diff = _differences(images)
+    typical = float(np.median(diff[np.triu_indices(count, 1)]))
+    if not typical > 0:
+        return None
+    diff /= typical
+    profile = _lag_profile(diff)
+    reach = 1
+    while reach < MAX_NEIGHBOURS and reach + 1 < count and profile[reach] < 1.0 - ALIKE * 0.8:
+        reach += 1
+    fits = [fit for lag0 in _candidates(profile, reach)
+            if (fit := _fit_period(diff, times_s, lag0, _repeats(profile, lag0, reach), reach,
+                                   clock_resolution_s)) is not None]
+    if not fits:
+        return None
+    best = min(fit.likeness for fit in fits)
+    return min((fit for fit in fits if fit.likeness <= 2.0 * best + 0.02), key=lambda fit: fit.period_s)
+
+
+def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int, reach: int,
+                clock_resolution_s: float) -> Period | None:
+    """The period near ``lag0`` frames that best predicts the differences of the pairs near its
+    first ``repeats`` multiples from their frames' neighbours (see the module's notes)."""
+    count = len(times_s)
+    step_s = float(np.median(np.diff(times_s)))
+    i, j = np.triu_indices(count, reach + 1)
+    lag = (j - i).astype(np.float64)
+    multiple = np.maximum(np.rint(lag / lag0), 1.0)
+    near = (np.abs(lag - multiple * lag0) <= reach + 1) & (multiple <= repeats)
+    i, j, multiple = i[near], j[near], multiple[near]
+    if len(i) < 1:
+        return None
+    values = diff[i, j]
+    gap_s = times_s[j] - times_s[i]
+    reach_s = (reach + 1.5) * step_s
+    grid_s = np.linspace(0.0, reach_s, SHAPE_POINTS)
+    shapes = _neighbour_shapes(diff, times_s, reach + 1, grid_s)
+    table = 0.5 * (shapes[i] + shapes[j])
+    rows = np.arange(len(i))
+
+    def costs(periods_s: np.ndarray, part: np.ndarray | slice = slice(None)) -> np.ndarray:
+        out = np.empty(len(periods_s))
+        for k, period in enumerate(periods_s):
+            miss = np.abs(gap_s[part] - multiple[part] * period) / reach_s * (SHAPE_POINTS - 1)
+            low = np.minimum(miss.astype(int), SHAPE_POINTS - 2)
+            frac = np.minimum(miss - low, 1.0)
+            predicted = table[rows[part], low] * (1 - frac) + table[rows[part], low + 1] * frac
+            out[k] = _robust_cost(values[part] - predicted)
+        return out
+
+    centre_s = lag0 * step_s
+    span_s = (reach + 1.0) * step_s
+    coarse = np.linspace(centre_s - span_s, centre_s + span_s, COARSE_POINTS)
+    coarse = coarse[coarse > reach * step_s]
+    if len(coarse) < 3:
+        return None
+    coarse_cost = costs(coarse)
+    best = int(np.argmin(coarse_cost))
+    if best in (0, len(coarse) - 1):
+        return None  # no minimum inside the search: the clip does not say where the repeat lies
+    step = coarse[1] - coarse[0]
+    scan = np.linspace(coarse[best] - step, coarse[best] + step, FINE_POINTS)
+    cost = costs(scan)
+    best = int(np.argmin(cost))
+    best = min(max(best, 1), len(scan) - 2)
+    # parabola through the best scan point and its neighbours
+    c0, c1, c2 = cost[best - 1:best + 2]
+    h = scan[1] - scan[0]
+    curvature = (c0 - 2 * c1 + c2) / h ** 2
+    shift = float(np.clip(0.5 * h * (c0 - c2) / (c0 - 2 * c1 + c2), -h, h)) if curvature > 0 else 0.0
+    period_s = float(scan[best] + shift)
+    minimum = float(costs(np.array([period_s]))[0])
+    # how well the pictures match at the period: the closest pairs' difference, and the fit
+    miss_s = np.abs(gap_s - multiple * period_s)
+    closest = values[miss_s <= max(0.5 * step_s, miss_s.min() + 1e-12)]
+    likeness = float(np.mean(closest)) if len(closest) else math.inf
+    # the closest pairs against their frames' farthest neighbours, and how sharply the fit
+    # prefers this period over those a few frames off
+    apart = table[miss_s <= max(0.5 * step_s, miss_s.min() + 1e-12), -1]
+    contrast = float(np.mean(closest) / np.mean(apart)) if len(apart) and np.mean(apart) > 0 else math.inf
+    fit = 1.0 - minimum / float(coarse_cost.max()) if coarse_cost.max() > 0 else 0.0
+    if likeness > ALIKE or contrast > CONTRAST or fit < MIN_FIT:
+        return None
+    # interval: the cost's curvature with one independent residual per frame involved, and a
+    # floor for where between two frames a repeat can be placed (per repeat spanned)
+    frames_involved = len(np.union1d(i, j))
+    se_s = math.sqrt(2.0 * minimum / max(frames_involved, 1) / curvature) if curvature > 0 else math.inf
+    floor_s = RESOLUTION_STEPS * step_s / repeats
+    clock_s = clock_resolution_s / repeats
+    # a rate that changes over the clip: the pairs of its first and second halves disagree, and
+    # the mean rate is known no better than half their difference
+    middle_s = 0.5 * (times_s[i] + times_s[j])
+    early = middle_s <= float(np.median(middle_s))
+    window = np.linspace(period_s - 3 * step, period_s + 3 * step, COARSE_POINTS)
+    halves = [float(window[int(np.argmin(costs(window, part)))]) for part in (early, ~early) if part.sum() >= 3]
+    drift_s = abs(halves[0] - halves[1]) if len(halves) == 2 else 0.0
+    half_s = math.sqrt((1.96 * se_s) ** 2 + floor_s ** 2 + clock_s ** 2 + (0.5 * drift_s) ** 2)
+    return Period(period_s, period_s - half_s, period_s + half_s, repeats, count, likeness, fit, drift_s)
+
+
+def harmonic(period: Period, omega_rad_s: float, omega_low_rad_s: float, omega_high_rad_s: float,
+             most: int = 12) -> int | None:
+    """How many periods make one turn, as the tracks' rate (with its interval) says: the whole
+    number whose rate lies inside the tracks' interval, nearest their rate; None when none does
+    (the two measurements disagree)."""
+    if not (math.isfinite(omega_rad_s) and omega_rad_s > 0):
+        return None
+    candidates = [m for m in range(1, most + 1)
+                  if omega_low_rad_s <= period.omega_rad_s(m)[0] <= omega_high_rad_s]
+    if not candidates:
+        return None
+    return min(candidates, key=lambda m: abs(math.log(period.omega_rad_s(m)[0] / omega_rad_s)))
