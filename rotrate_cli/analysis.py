@@ -26,6 +26,7 @@ from rotrate_cli.focal import FocalEstimate, estimate_focal
 from rotrate_cli.joint import joint_fit
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import (
+    FEATURE_COLUMNS,
     Combined,
     RejectionConfig,
     combine,
@@ -34,6 +35,7 @@ from rotrate_cli.outliers import (
     judge_fits,
     judge_paper,
 )
+from rotrate_cli.period import Period, Thumbnails, find_period
 from rotrate_cli.segment import Body, segment_tracks, unresolved
 from rotrate_cli.series import rate_series
 from rotrate_cli.tracking import (
@@ -44,6 +46,7 @@ from rotrate_cli.tracking import (
     tracking_image,
     tracking_scale,
 )
+from rotrate_cli.verdict import Verdict, judge
 
 #: Progress callback: (frames done, frames expected or None).
 ProgressCallback = Callable[[int, int | None], None]
@@ -104,6 +107,7 @@ class AnalysisConfig:
         tracker_kind: ``klt`` (pyramidal Lucas-Kanade) or ``csrt`` (OpenCV's CSRT: for chosen
             points, or for 30 automatic corners placed to sub-pixel, see :mod:`rotrate_cli.csrt`;
             about 5x slower than ``klt``, and for videos, not stills far apart).
+        times_s: one time per frame, seconds (``--times``), instead of the source's clock.
     """
 
     fixation_px: tuple[float, float] | None
@@ -125,6 +129,7 @@ class AnalysisConfig:
     keep_tracks: bool = False
     points_px: tuple[tuple[float, float], ...] = ()
     tracker_kind: str = "klt"
+    times_s: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -158,6 +163,13 @@ class Analysis:
             first; None otherwise.
         tracks: with ``keep_tracks``, the positions ``frame, time_s, track, x_px, y_px``
             (tracks numbered as the features); None otherwise.
+        verdict: how the reported rate was judged from the tracks and the clip's repetition,
+            and its quality (``good``/``weak``; see :mod:`rotrate_cli.verdict`).
+        period: the clip's repetition (:mod:`rotrate_cli.period`), or None where none was seen.
+        clock: where the frame times came from (``container``, ``fps``, ``exif``, ``times file``;
+            ``tracks`` for given tracks).
+        camera_from: the camera model used: ``orthographic`` (the paper's), ``given`` (``--fov``
+            or ``--focal-px``), ``exif`` (the photographs' lens) or ``found`` (``--fov auto``).
 
     ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
     a long clip's table is large, and most reports do not need it.
@@ -189,6 +201,20 @@ class Analysis:
     series: pd.DataFrame | None = None
     bodies: tuple[Body, ...] | None = None
     tracks: pd.DataFrame | None = None
+    verdict: Verdict | None = None
+    period: Period | None = None
+    clock: str = "container"
+    camera_from: str = "orthographic"
+
+    @property
+    def quality(self) -> str:
+        """``good``, or ``weak`` when the evidence is weak (see :mod:`rotrate_cli.verdict`)."""
+        return self.verdict.quality if self.verdict is not None else "good"
+
+    @property
+    def rate_from(self) -> str:
+        """What the reported rate comes from: ``tracks`` or ``repetition``."""
+        return self.verdict.rate_from if self.verdict is not None else "tracks"
 
     @property
     def rpm(self) -> float:
@@ -415,15 +441,23 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
 
 
 def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None) -> Analysis:
-    video = FrameSource(source, fps=config.fps)
+    video = FrameSource(source, fps=config.fps,
+                        times_s=None if config.times_s is None else np.asarray(config.times_s, dtype=np.float64))
     info = video.info
+    warnings_early: list[str] = list(video.warnings)
+    camera_from = "given" if config.fov_deg is not None or config.focal_px is not None else "orthographic"
+    if (camera_from == "orthographic" and info.focal_px is not None and not config.find_focal
+            and config.method == "fit"):
+        config = replace(config, focal_px=info.focal_px)  # the photographs' own lens
+        camera_from = "exif"
     if config.fixation_px is not None:
         fx, fy = config.fixation_px
+        if not (math.isfinite(fx) and math.isfinite(fy)):
+            raise InputError("--fixation must be two numbers X,Y in pixels, or auto")
         if not (0 <= fx <= info.width_px - 1 and 0 <= fy <= info.height_px - 1):
-            raise InputError(
-                f"fixation ({fx:g}, {fy:g}) lies outside the {info.width_px}x{info.height_px} frame; "
-                "give X,Y in pixels inside it, or --fixation auto"
-            )
+            # a record player's spindle seen close up lies outside the picture: measured, but said
+            warnings_early.append(f"the fixation ({fx:g}, {fy:g}) lies outside the {info.width_px}x{info.height_px} "
+                                  "frame; check it, or use --fixation auto")
     roi = config.tracker.roi
     if roi is not None and (
         roi.width_px <= 0 or roi.height_px <= 0 or roi.x_px < 0 or roi.y_px < 0
@@ -434,7 +468,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     tracker = config.tracker
     if config.axis_angle_deg is not None and _across(config.axis_angle_deg):
         tracker = _turned(tracker)
-    run = _track(video, config, tracker, progress)
+    thumbnails = Thumbnails()
+    run = _track(video, config, tracker, progress, thumbnails)
     count = run.frames
     if count == 0:
         raise InputError(f"no frame of {source} lies between --start and --end")
@@ -446,7 +481,6 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     release_free_memory()  # the tracker's store and the frames' buffers are gone
     angle = config.axis_angle_deg
     assumed_vertical = False
-    warnings_early: list[str] = []
     elevation_found = math.nan
     angle_source = config.angle_from
     if angle is None and everything["track"].nunique() < MIN_TRACKS_FOR_ANGLE:
@@ -455,7 +489,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         angle = axes.motion_angle_deg(everything)
         if _across(angle):
             # the motion runs up and down the image: track again with the window turned to suit it
-            run = _track(video, config, _turned(tracker), progress)
+            thumbnails.clear()
+            run = _track(video, config, _turned(tracker), progress, thumbnails)
             if run.tracks.empty:
                 raise NoResultError(_no_result_message(pd.DataFrame(columns=["reason"])))
             everything = _by_track(run.tracks)
@@ -485,29 +520,66 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
                "rejection": config.rejection, "axis_angle_deg": float(angle),
                "axis_found": config.fixation_px is None,
                "axis_angle_found": config.axis_angle_deg is None and not assumed_vertical,
-               "axis_angle_from": angle_source, "elevation_deg": elevation_found}
+               "axis_angle_from": angle_source, "elevation_deg": elevation_found, "clock": info.clock,
+               "camera_from": camera_from}
     if config.segment:
         return _segmented(everything, angle, config, size_px, warnings, context)
     kept = None
     if config.keep_tracks:  # for pictures of the measurement (an overlay): numbered as the features
         kept = everything[["frame", "time_s", "track", "x_px", "y_px"]].assign(track=everything["track"] + 1)
-    body = _prepare_body(everything, angle, config)
+    period = _repetition(thumbnails, config, info.clock_resolution_s)
+    thumbnails.clear()
+    try:
+        body = _prepare_body(everything, angle, config)
+    except NoResultError:
+        if period is None:
+            raise
+        return _repetition_only(period, config, warnings, kept, context)
     focal = None
     if config.find_focal:
         config, focal, found = _find_focal(everything, body, angle, config, size_px)
         warnings.extend(found)
         if focal is not None and math.isfinite(focal.focal_px):
             context["elevation_deg"] = focal.elevation_deg
+            context["camera_from"] = "found"
     del everything  # the offsets hold what is needed: a long clip's positions need not stay
     release_free_memory()
     fixation, result, camera = _measure_body(body, angle, config, size_px)
     del body
+    if result.combined.tracks_used == 0 and period is not None:
+        return _repetition_only(period, config, warnings, kept, context, result)
     series = None
     if config.window_s is not None:
         series = rate_series(result.offsets, config.window_s,
                              lambda part: rates_from_offsets(part, config.method, config.rejection, camera).combined)
     return _result(result, fixation_px=(float(fixation[0]), float(fixation[1])), method=_method_name(config, camera),
-                   warnings=tuple(warnings), series=series, tracks=kept, focal=focal, **context)
+                   warnings=tuple(warnings), series=series, tracks=kept, focal=focal, period=period, **context)
+
+
+def _repetition(thumbnails: Thumbnails, config: AnalysisConfig, clock_resolution_s: float) -> Period | None:
+    """The clip's repetition (:mod:`rotrate_cli.period`) where it can stand for the body's turn:
+    the fit method on automatic points (chosen points and the paper's method are measured as
+    they are; several bodies do not repeat as one)."""
+    if config.method != "fit" or config.points_px or config.segment:
+        return None
+    return find_period(thumbnails.times_s, thumbnails.images, clock_resolution_s)
+
+
+def _repetition_only(period: Period, config: AnalysisConfig, warnings: list[str], kept: pd.DataFrame | None,
+                     context: dict[str, object], result: RateResult | None = None) -> Analysis:
+    """The Analysis when no track gave a rate but the clip repeats: the rate is the repetition's,
+    the sense of turning unknown."""
+    features = result.features if result is not None else pd.DataFrame(columns=list(FEATURE_COLUMNS))
+    offsets = result.offsets if result is not None else pd.DataFrame(
+        {"track": pd.Series(dtype=int), "frame": pd.Series(dtype=int), "time_s": pd.Series(dtype=float),
+         "offset_px": pd.Series(dtype=float)})
+    empty = RateResult(offsets, features, Combined(math.nan, math.nan, math.nan, 0), "unknown")
+    fixation = config.fixation_px if config.fixation_px is not None else (math.nan, math.nan)
+    notes = [*warnings, "no track gave a rate: the rate is the clip's repetition alone, and the sense of turning "
+             "is unknown" + ("; CSRT loses points that jump far between frames (stills taken far apart, fast "
+                             "turns): the default --tracker klt follows those" if config.tracker_kind == "csrt" else "")]
+    return _result(empty, fixation_px=(float(fixation[0]), float(fixation[1])), method=config.method,
+                   warnings=tuple(notes), series=None, tracks=kept, focal=None, period=period, **context)
 
 
 def _find_focal(everything: pd.DataFrame, body: _Prepared, angle: float, config: AnalysisConfig,
@@ -712,8 +784,9 @@ def _turned(tracker: TrackerConfig) -> TrackerConfig:
 
 
 def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
-           progress: ProgressCallback | None) -> TrackingRun:
-    """Decode (in a background thread) and track the frames of ``video`` between start and end."""
+           progress: ProgressCallback | None, thumbnails: Thumbnails) -> TrackingRun:
+    """Decode (in a background thread) and track the frames of ``video`` between start and end,
+    keeping a thumbnail of each in ``thumbnails`` (for the repetition, :mod:`rotrate_cli.period`)."""
     info = video.info
     scale = tracking_scale(info.width_px, tracker)
     blur = tracker.blur_sigma_px
@@ -725,11 +798,12 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
     size_px = (info.width_px, info.height_px)
+    stream = thumbnails.tap(prefetch(frames))
     if config.points_px:
-        return follow_points(prefetch(frames), size_px, list(config.points_px), config.tracker_kind, tracker, notify)
+        return follow_points(stream, size_px, list(config.points_px), config.tracker_kind, tracker, notify)
     if config.tracker_kind == "csrt":
-        return track_frames(prefetch(frames), size_px, csrt_settings(tracker), notify, kind=CsrtTracker)
-    return track_frames(prefetch(frames), size_px, tracker, notify)
+        return track_frames(stream, size_px, csrt_settings(tracker), notify, kind=CsrtTracker)
+    return track_frames(stream, size_px, tracker, notify)
 
 
 def _refine_fixation(
@@ -756,20 +830,30 @@ def _refine_fixation(
     return fixation, result, camera
 
 
-def _result(rates_result: RateResult, **context: object) -> Analysis:
-    """The Analysis of a rate result and its context; NoResultError when no track was used."""
+def _result(rates_result: RateResult, period: Period | None = None, **context: object) -> Analysis:
+    """The Analysis of a rate result, the clip's repetition (if any) and their context: the
+    reported rate is judged from both (:func:`rotrate_cli.verdict.judge`). NoResultError when
+    neither gave a rate."""
     combined = rates_result.combined
-    if combined.tracks_used == 0:
+    if combined.tracks_used == 0 and period is None:
         raise NoResultError(_no_result_message(rates_result.features))
+    verdict = judge(combined if combined.tracks_used > 0 else None, period, combined.tracks_used)
+    warnings = tuple(context.pop("warnings", ()))  # type: ignore[arg-type]
+    warnings += verdict.notes
+    if verdict.quality == "weak":
+        warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
     return Analysis(
-        omega_rad_s=combined.omega_rad_s,
-        omega_low_rad_s=combined.omega_low_rad_s,
-        omega_high_rad_s=combined.omega_high_rad_s,
+        omega_rad_s=verdict.omega_rad_s,
+        omega_low_rad_s=verdict.omega_low_rad_s,
+        omega_high_rad_s=verdict.omega_high_rad_s,
         direction=rates_result.direction,
         tracks_total=int(len(rates_result.features)),
         tracks_used=combined.tracks_used,
         features=rates_result.features,
         offsets=rates_result.offsets,
+        warnings=warnings,
+        verdict=verdict,
+        period=period,
         **context,  # type: ignore[arg-type]
     )
 
@@ -808,6 +892,7 @@ def analyze_tracks(
     if not math.isfinite(fixation):
         raise InputError("--fixation must be a number (the axis position in the tracks' units)")
     table = tracks.copy()
+    given_fps = fps is not None
     if fps is not None:
         if not (fps > 0 and math.isfinite(fps)):
             raise InputError("--fps must be a positive number of frames per second")
@@ -827,4 +912,4 @@ def analyze_tracks(
     return _result(result, source=source, fps=float(fps), frames=int(table["frame"].nunique()),
                    duration_s=float(table["time_s"].max() - table["time_s"].min()),
                    fixation_px=(float(fixation), math.nan), method=method, rejection=rules,
-                   position_unit=position_unit)
+                   position_unit=position_unit, clock="fps" if given_fps else "tracks")

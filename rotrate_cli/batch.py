@@ -24,9 +24,10 @@ from rotrate_cli.errors import InputError, NoResultError, RotrateError
 from rotrate_cli.focal import parse_fov
 
 VIDEO_SUFFIXES = frozenset({".mp4", ".mov", ".avi", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"})
-SUMMARY_COLUMNS = ("file", "status", "omega", "omega_low", "omega_high", "rpm", "direction", "tracks_used", "error")
+SUMMARY_COLUMNS = ("file", "status", "omega", "omega_low", "omega_high", "rpm", "direction", "tracks_used",
+                   "quality", "error")
 #: Outcome statuses and the exit code each stands for (a batch exits with the largest).
-STATUS_CODES = {"ok": 0, "off_target": 1, "no_result": 1, "bad_input": 2, "failed": 3}
+STATUS_CODES = {"ok": 0, "weak": 1, "off_target": 1, "no_result": 1, "bad_input": 2, "failed": 3}
 
 
 @dataclass(frozen=True)
@@ -35,7 +36,8 @@ class Outcome:
 
     Attributes:
         source: the input as expanded.
-        status: ``ok``, ``off_target`` (outside ``--expect``'s band), ``no_result`` (read, but
+        status: ``ok``, ``weak`` (weak evidence, with ``--strict``), ``off_target`` (outside
+            ``--expect``'s band), ``no_result`` (read, but
             no trustworthy rate), ``bad_input`` or ``failed`` (an unexpected error).
         analysis: the analysis when there was one (``ok`` and ``off_target``), else None.
         error: one line saying what went wrong ("" when nothing did).
@@ -106,6 +108,7 @@ class Job:
     config: AnalysisConfig
     expected_rad_s: float | None = None
     tolerance_pct: float | None = None
+    strict: bool = False
 
 
 def run_one(job: Job) -> Outcome:
@@ -127,7 +130,15 @@ def run_one(job: Job) -> Outcome:
         miss = check_expected(analysis.omega_rad_s, job.expected_rad_s, job.tolerance_pct)
         if miss:
             return Outcome(job.source, "off_target", analysis, miss)
+    if job.strict and analysis.quality == "weak":
+        return Outcome(job.source, "weak", analysis, weak_message(analysis))
     return Outcome(job.source, "ok", analysis)
+
+
+def weak_message(analysis: Analysis) -> str:
+    """The one line ``--strict`` fails with on a weak result."""
+    reasons = "; ".join(analysis.verdict.weak_because) if analysis.verdict is not None else ""
+    return f"weak evidence ({reasons}); the result is not trusted with --strict"
 
 
 def run_batch(
@@ -199,6 +210,7 @@ def summary_frame(outcomes: Sequence[Outcome]) -> pd.DataFrame:
             "rpm": a.rpm if a else math.nan,
             "direction": a.direction if a else "",
             "tracks_used": a.tracks_used if a else 0,
+            "quality": a.quality if a else "",
             # a result with a caveat (a file cut off, say) keeps it in the row
             "error": outcome.error or "; ".join(f"warning: {w}" for w in (a.warnings if a else ())),
         })

@@ -44,7 +44,9 @@ from rotrate_cli.batch import (
     expand_inputs,
     read_manifest,
     run_batch,
+    weak_message,
 )
+from rotrate_cli.clock import read_times
 from rotrate_cli.decode import FrameSource
 from rotrate_cli.errors import InputError, OutputError, RotrateError
 from rotrate_cli.focal import parse_fov
@@ -231,6 +233,11 @@ def analyze_command(
     expect: Annotated[float | None, typer.Option("--expect", help="Expected omega, rad/s: exit 1 when the "
                                                                   "result is outside --tolerance of it.")] = None,
     tolerance: Annotated[float | None, typer.Option("--tolerance", help="Tolerance of --expect, percent.")] = None,
+    strict: Annotated[bool, typer.Option("--strict", help="Exit 1 when the evidence is weak (quality: weak).")
+                      ] = False,
+    times: Annotated[Path | None, typer.Option("--times", metavar="PATH",
+                                               help="A file of frame times, seconds, one per line (one per frame), "
+                                                    "instead of --fps or the photographs' EXIF times.")] = None,
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Inputs analysed at once (processes).")] = 1,
     scheduler: SchedulerOption = None,
     output_dir: Annotated[Path | None, typer.Option("--output-dir", help="With several inputs: write each "
@@ -268,7 +275,9 @@ def analyze_command(
                 raise InputError("--series-csv needs --window SECONDS")
             check_output_path(series_csv_path, force)
         fov_deg, find_focal = parse_fov(fov)
+        frame_times = None if times is None else tuple(float(t) for t in read_times(times))
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
+                                times_s=frame_times,
                                 axis_angle_deg=axis_angle, angle_from=angle_from, elevation_deg=elevation,
                                 window_s=window, start_s=start,
                                 end_s=end, every=every,
@@ -287,7 +296,8 @@ def analyze_command(
         if len(videos) > 1 or sources != videos:
             if series_csv_path is not None or overlay is not None or plot is not None:
                 raise InputError("--series-csv, --overlay and --plot take one input; with several, use --output-dir")
-            return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, fmt, output, force)
+            return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, fmt, output, force,
+                          strict)
         if scheduler is not None:
             raise InputError("--scheduler is for several inputs (a batch); with one, drop it")
         if output_dir is not None:
@@ -308,6 +318,8 @@ def analyze_command(
             miss = check_expected(analysis.omega_rad_s, expect, tolerance)
             if miss:
                 raise _fail(miss, 1)
+        if strict and analysis.quality == "weak":
+            raise _fail(weak_message(analysis), 1)
         return 0
 
     code = _run(debug, job)
@@ -366,7 +378,8 @@ def _detail_paths(sources: list[str], folder: Path, suffix: str) -> list[Path]:
 
 
 def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tolerance: float | None, jobs: int,
-           scheduler: str | None, output_dir: Path | None, fmt: str, output: Path | None, force: bool) -> int:
+           scheduler: str | None, output_dir: Path | None, fmt: str, output: Path | None, force: bool,
+           strict: bool = False) -> int:
     """Analyse several inputs; one summary row each; the worst input's exit code."""
     details: list[Path] = []
     if output_dir is not None:
@@ -375,7 +388,8 @@ def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tol
         details = _detail_paths(sources, output_dir, ".csv" if fmt == "csv" else ".json")
         for path in details:
             check_output_path(path, force)  # before a long run, not after
-    outcomes = run_batch([Job(source, config, expect, tolerance) for source in sources], jobs, scheduler=scheduler)
+    outcomes = run_batch([Job(source, config, expect, tolerance, strict) for source in sources], jobs,
+                         scheduler=scheduler)
     for outcome, path in zip(outcomes, details, strict=False):
         if outcome.analysis is not None:
             write_text(path, render(outcome.analysis, "csv" if fmt == "csv" else "json"), force)

@@ -41,6 +41,10 @@ class VideoInfo:
         frame_count: the container's frame count, or the number of images; None when unknown.
         is_image_sequence: True for image patterns and folders.
         fps_overridden: True when the user gave the rate, so times are ``index / fps``.
+        clock: where frame times come from: ``container``, ``fps``, ``exif`` or ``times file``
+            (see :class:`rotrate_cli.clock.Clock`).
+        clock_resolution_s: how finely those times are known, seconds.
+        focal_px: the lens's focal length in pixels from the photographs' EXIF, or None.
     """
 
     source: str
@@ -50,6 +54,9 @@ class VideoInfo:
     frame_count: int | None
     is_image_sequence: bool
     fps_overridden: bool
+    clock: str = "container"
+    clock_resolution_s: float = 0.0
+    focal_px: float | None = None
 
 
 @dataclass(frozen=True)
@@ -126,15 +133,22 @@ class FrameSource:
 
     Args:
         source: video path, printf image pattern, or folder of images.
-        fps: frame rate override in frames per second; required for image sequences.
+        fps: frame rate override in frames per second; for image sequences without capture
+            times in their EXIF, required (or ``times_s``).
+        times_s: one time per frame (``--times``), instead of the source's own or ``fps``.
 
     Raises:
-        InputError: the source does not exist, cannot be decoded, or has no usable frame rate.
+        InputError: the source does not exist, cannot be decoded, has no usable frame rate, or
+            ``times_s`` does not fit it.
     """
 
-    def __init__(self, source: str | Path, fps: float | None = None) -> None:
+    def __init__(self, source: str | Path, fps: float | None = None, times_s: np.ndarray | None = None) -> None:
         self._source = str(source)
         _check_fps(fps, "the given")
+        if fps is not None and times_s is not None:
+            raise InputError("give --fps or --times, not both")
+        self._times = None if times_s is None else np.asarray(times_s, dtype=np.float64)
+        self.warnings: list[str] = []
         self._files: list[Path] | None = None
         self._first_grey: np.ndarray | None = None  # a thumbnail of a video's first frame, to check its luma
         self._luma: tuple[np.ndarray | None] | None = None  # the checked luma table, once checked
@@ -151,13 +165,11 @@ class FrameSource:
             raise InputError(f"the file is empty: {self._source}")
 
         if self._files is not None:
-            if fps is None:
-                raise InputError("an image sequence has no frame rate; pass --fps (frames per second)")
             first = cv2.imread(str(self._files[0]), cv2.IMREAD_COLOR)
             if first is None:
                 raise InputError(f"could not read the image {self._files[0]}; is it a picture file?")
             height, width = first.shape[:2]
-            self.info = VideoInfo(self._source, width, height, float(fps), len(self._files), True, True)
+            self.info = self._sequence_info(width, height, fps)
             return
 
         capture = self._open_capture()
@@ -176,15 +188,51 @@ class FrameSource:
                 raise InputError(f"could not read the frame rate of {self._source}; pass --fps")
         height, width = first.shape[:2]
         self._first_grey = _grey(first)[::4, ::4]
+        if self._times is not None and count > 0 and len(self._times) != count:
+            raise InputError(f"--times gives {len(self._times)} times but {self._source} announces {count} frames; "
+                             "give one time per frame")
+        if self._times is not None:
+            rate = _mean_rate(self._times)
+        else:
+            rate = float(fps if fps is not None else container_fps)
         self.info = VideoInfo(
             self._source,
             width,
             height,
-            float(fps if fps is not None else container_fps),
+            rate,
             count if count > 0 else None,
             False,
-            fps is not None,
+            fps is not None or self._times is not None,
+            "times file" if self._times is not None else "fps" if fps is not None else "container",
         )
+
+    def _sequence_info(self, width: int, height: int, fps: float | None) -> VideoInfo:
+        """An image sequence's info and clock: ``--times``, else its EXIF capture times, else
+        ``--fps``; with ``--fps`` given, EXIF times that disagree by more than 1% are warned of."""
+        from rotrate_cli.clock import exif_focal_px, exif_times  # Pillow only for photographs
+
+        files = self._files or []
+        focal_px = exif_focal_px(files[0], width)
+        if self._times is not None:
+            if len(self._times) != len(files):
+                raise InputError(f"--times gives {len(self._times)} times for {len(files)} images; "
+                                 "give one time per image")
+            return VideoInfo(self._source, width, height, _mean_rate(self._times), len(files), True, True,
+                             "times file", 0.0, focal_px)
+        exif = exif_times(files)
+        if fps is None:
+            if exif is None or exif.times_s is None:
+                raise InputError("an image sequence has no frame rate and its images carry no capture times; "
+                                 "pass --fps (frames per second) or --times FILE (one time per image)")
+            self._times = exif.times_s
+            return VideoInfo(self._source, width, height, _mean_rate(exif.times_s), len(files), True, False,
+                             "exif", exif.resolution_s, focal_px)
+        if exif is not None and exif.times_s is not None:
+            exif_rate = _mean_rate(exif.times_s)
+            if abs(exif_rate / fps - 1.0) > 0.01:
+                self.warnings.append(f"--fps {fps:g} differs from the images' EXIF capture times ({exif_rate:.4g} "
+                                     "frames/s on average); the times used are index / --fps")
+        return VideoInfo(self._source, width, height, float(fps), len(files), True, True, "fps", 0.0, focal_px)
 
     def _open_capture(self) -> cv2.VideoCapture:
         capture = cv2.VideoCapture(self._source, cv2.CAP_FFMPEG)
@@ -223,7 +271,7 @@ class FrameSource:
             convert = _compose(_grey, convert)
         if self._files is not None:
             for index, file in enumerate(self._files):
-                time_s = index / self.info.fps
+                time_s = float(self._times[index]) if self._times is not None else index / self.info.fps
                 if time_s < start_s - 1e-9:
                     continue
                 if end_s is not None and time_s > end_s + 1e-9:
@@ -340,6 +388,11 @@ class FrameSource:
         return self._video_frames(self._open_luma_capture(), start_s, end_s, mapped, quiet=True)
 
     def _frame_time_s(self, capture: cv2.VideoCapture, index: int, last_time_s: float) -> float:
+        if self._times is not None:
+            if index >= len(self._times):
+                raise InputError(f"--times gives {len(self._times)} times but {self._source} has more frames; "
+                                 "give one time per frame")
+            return float(self._times[index])
         fallback = index / self.info.fps
         if self.info.fps_overridden:
             return fallback
@@ -348,6 +401,11 @@ class FrameSource:
         if not math.isfinite(stamp_ms) or stamp_ms < 0 or (index > 0 and stamp_ms / 1000.0 <= last_time_s):
             return fallback
         return stamp_ms / 1000.0
+
+
+def _mean_rate(times_s: np.ndarray) -> float:
+    """Frames per second on average over ``times_s``."""
+    return (len(times_s) - 1) / float(times_s[-1] - times_s[0])
 
 
 def _compose(

@@ -76,7 +76,8 @@ class Period:
             (0: identical pictures); under :data:`ALIKE` to count.
         fit: how sharply the period is preferred: 1 - its cost over the worst cost of the
             periods a few frames off (0..1).
-        drift_s: the period measured on the clip's second half how far apart the periods of its first and second halves lie apart (a changing rate), seconds.
+        drift_s: how far apart the periods measured on the clip's first and second halves lie
+            (a changing rate), seconds.
     """
 
     period_s: float

@@ -34,6 +34,17 @@ def _elevation_text(analysis: Analysis) -> str:
     return f"; camera elevation {analysis.elevation_deg:.0f} deg, up or down"
 
 
+def _rate_from_text(analysis: Analysis) -> str:
+    """Where the reported rate comes from, in words."""
+    period = analysis.period
+    if analysis.rate_from != "repetition" or period is None:
+        return "the tracks' fits"
+    per_turn = analysis.verdict.repeats_per_turn if analysis.verdict is not None else 1
+    turn = "" if per_turn == 1 else f", {per_turn} repeats a turn"
+    return (f"the clip's repetition: the picture repeats every {period.period_s:.4g} s "
+            f"(seen {period.repeats} time(s){turn})")
+
+
 def _number(value: float, digits: int = 6) -> float | None:
     return None if value is None or not math.isfinite(value) else round(float(value), digits)
 
@@ -105,6 +116,18 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
         "omega_low": _number(analysis.omega_low_rad_s),
         "omega_high": _number(analysis.omega_high_rad_s),
         "rpm": _number(analysis.rpm, 4),
+        "quality": analysis.quality,
+        "weak_because": list(analysis.verdict.weak_because) if analysis.verdict is not None else [],
+        "rate_from": analysis.rate_from,
+        "clock": analysis.clock,
+        "repetition": None if analysis.period is None else {
+            "period_s": _number(analysis.period.period_s),
+            "period_low_s": _number(analysis.period.period_low_s),
+            "period_high_s": _number(analysis.period.period_high_s),
+            "repeats_seen": analysis.period.repeats,
+            "repeats_per_turn": analysis.verdict.repeats_per_turn if analysis.verdict is not None else 1,
+            "likeness": _number(analysis.period.likeness, 4),
+        },
         "direction": analysis.direction,
         "tracks_total": analysis.tracks_total,
         "tracks_used": analysis.tracks_used,
@@ -152,6 +175,8 @@ def render_table(analysis: Analysis, console: Console) -> None:
     summary.add_column("value")
     summary.add_row("omega", f"{analysis.omega_rad_s:.4f} rad/s  ({analysis.rpm:.3f} rpm)")
     summary.add_row("95% interval", f"{interval} rad/s")
+    summary.add_row("quality", analysis.quality)
+    summary.add_row("rate from", _rate_from_text(analysis))
     summary.add_row("direction", analysis.direction)
     fx, fy = analysis.fixation_px
     summary.add_row("fixation", f"{fx:.1f}" + ("" if math.isnan(fy) else f", {fy:.1f}")
@@ -166,7 +191,8 @@ def render_table(analysis: Analysis, console: Console) -> None:
         summary.add_row("camera", "no perspective seen: orthographic" if not math.isfinite(analysis.focal.focal_px)
                         else f"found: focal {analysis.focal.focal_px:.0f} px (field of view "
                         f"{analysis.focal.fov_deg:.1f} deg), from {analysis.focal.tracks} tracks")
-    summary.add_row("frames", f"{analysis.frames} over {analysis.duration_s:.2f} s at {analysis.fps:g} fps")
+    summary.add_row("frames", f"{analysis.frames} over {analysis.duration_s:.2f} s at {analysis.fps:g} fps"
+                    f"  (clock: {analysis.clock})")
     reasons = Counter(r for r in analysis.features["reason"] if r)
     rejected = ", ".join(f"{n} {why}" for why, n in reasons.most_common()) or "none"
     summary.add_row("features", f"{analysis.tracks_used} used of {analysis.tracks_total}; rejected: {rejected}")

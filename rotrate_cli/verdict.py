@@ -1,0 +1,125 @@
+"""The judged estimate: the tracks' rate and the clip's repetition weighed into one number, and
+how far it can be trusted.
+
+Two measurements can stand behind a result. The tracks' fits (:mod:`rotrate_cli.rates`) work on
+any length of clip but rest on a model of the projection and on every kept track lying on the
+body; on real footage (mirroring paint, grooves that slide under the tracker, people moving
+behind) they can be biased while their interval stays narrow. The repetition
+(:mod:`rotrate_cli.period`) needs about a turn but no model at all. Where both exist:
+
+- the tracks' rate, when it is informative (its interval within :data:`INFORMATIVE_HALF_WIDTH`),
+  says how many repeats make a turn (an object with an m-fold symmetry repeats m times);
+- the result is the repetition's, which is the more precise and the less biased;
+- where no whole number of repeats fits inside an informative tracks' interval, the two
+  disagree: the repetition's rate stands, one repeat a turn, and a note says so; when the
+  tracks lie near a whole number of repeats from 2 to :data:`MOST_SYMMETRY` (within
+  :data:`NEAR_FACTOR`), the object
+  may be symmetric and the result is marked weak.
+
+The quality is ``weak`` when the interval is wider than :data:`WEAK_HALF_WIDTH` of the rate,
+when fewer than :data:`MIN_TRACKS` tracks stand behind a tracks-only result, or when the
+measurements disagree; each reason is given.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from rotrate_cli.outliers import Combined
+from rotrate_cli.period import Period, harmonic
+
+#: An interval wider than this fraction of the rate on either side is weak evidence.
+WEAK_HALF_WIDTH = 0.05
+#: The tracks' rate tells the number of repeats a turn only when its interval is this narrow.
+INFORMATIVE_HALF_WIDTH = 0.25
+#: A tracks-only result needs this many consistent tracks to be called good.
+MIN_TRACKS = 5
+#: Where the tracks and the repetition disagree, tracks within this factor of a whole number
+#: (above one) of repeats a turn make the result weak: the object may be symmetric.
+NEAR_FACTOR = 1.1
+#: Beyond this many repeats a turn, whole numbers lie so close that being near one says nothing.
+MOST_SYMMETRY = 6
+
+RATE_SOURCES = ("tracks", "repetition")
+QUALITIES = ("good", "weak")
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The rate reported, where it comes from, and how far to trust it.
+
+    Attributes:
+        omega_rad_s, omega_low_rad_s, omega_high_rad_s: the rate and its 95% interval (rad/s).
+        rate_from: ``tracks`` or ``repetition``.
+        repeats_per_turn: with the repetition, how many repeats make a turn (1 usually).
+        quality: ``good`` or ``weak``.
+        weak_because: why it is weak (empty when good).
+        notes: what the user should know about how the two measurements compared.
+    """
+
+    omega_rad_s: float
+    omega_low_rad_s: float
+    omega_high_rad_s: float
+    rate_from: str
+    repeats_per_turn: int
+    quality: str
+    weak_because: tuple[str, ...]
+    notes: tuple[str, ...]
+
+
+def _half_width(omega: float, low: float, high: float) -> float:
+    """The interval's larger half as a fraction of the rate (inf when unknown)."""
+    if not (math.isfinite(omega) and omega > 0 and math.isfinite(low) and math.isfinite(high)):
+        return math.inf
+    return max(omega - low, high - omega) / omega
+
+
+def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0) -> Verdict:
+    """The reported rate from the tracks' combined rate (None: no track gave one) and the
+    clip's repetition (None: none seen); ``tracks_used`` tracks stand behind ``tracks``.
+
+    Raises:
+        ValueError: neither measurement is given.
+    """
+    if period is None:
+        if tracks is None:
+            raise ValueError("no measurement to judge")
+        return _tracks_only(tracks, tracks_used)
+    notes: list[str] = []
+    weak: list[str] = []
+    repeats = 1
+    if tracks is not None and math.isfinite(tracks.omega_rad_s) and tracks.omega_rad_s > 0:
+        spread = _half_width(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s)
+        if spread <= INFORMATIVE_HALF_WIDTH:
+            found = harmonic(period, tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s)
+            if found is None:
+                nearest = max(1, round(period.omega_rad_s()[0] / tracks.omega_rad_s))
+                ratio = period.omega_rad_s(nearest)[0] / tracks.omega_rad_s
+                disagreement = (f"the tracks' rate ({tracks.omega_rad_s:.4g} rad/s) disagrees with the clip's "
+                                f"repetition ({period.omega_rad_s()[0]:.4g} rad/s a repeat)")
+                if 1 < nearest <= MOST_SYMMETRY and 1 / NEAR_FACTOR <= ratio <= NEAR_FACTOR:
+                    # near a whole number of repeats: a symmetric object, or tracks gone astray
+                    weak.append(f"{disagreement}; the object may repeat {nearest} times a turn")
+                else:
+                    notes.append(f"{disagreement}; the repetition is reported: on real footage tracks "
+                                 "that slide or mirror can bias a rate while a picture's return cannot")
+            else:
+                repeats = found
+                if repeats > 1:
+                    notes.append(f"the picture repeats {repeats} times a turn (a symmetric object); "
+                                 "the tracks' rate tells which")
+    omega, low, high = period.omega_rad_s(repeats)
+    if _half_width(omega, low, high) > WEAK_HALF_WIDTH:
+        weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
+    return Verdict(omega, low, high, "repetition", repeats, "weak" if weak else "good", tuple(weak), tuple(notes))
+
+
+def _tracks_only(tracks: Combined, tracks_used: int) -> Verdict:
+    weak = []
+    if _half_width(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s) > WEAK_HALF_WIDTH:
+        weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
+    if tracks_used < MIN_TRACKS:
+        weak.append(f"only {tracks_used} track(s) agree")
+    return Verdict(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s, "tracks", 1,
+                   "weak" if weak else "good", tuple(weak), ())
