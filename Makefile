@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow lint bench bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-fov-auto clean
+.PHONY: demo test test-slow lint bench bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-fov-auto clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -31,6 +31,10 @@ lint: $(STAMP)
 ## bench: decode vs analyze speed on a 720p clip, and peak memory for a clip and one 4x as long
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_speed.py
+
+## bench-real: real footage with known truth (../shared/data), default settings: error, interval, coverage, sense
+bench-real: $(STAMP)
+	$(BIN)/python benchmarks/bench_real.py
 
 ## bench-accuracy: the paper's method vs ours on 17 rendered conditions with known rates (renders cached)
 bench-accuracy: $(STAMP)

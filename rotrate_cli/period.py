@@ -239,7 +239,7 @@ def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int
     """The period near ``lag0`` frames that best predicts the differences of the pairs near its
     first ``repeats`` multiples from their frames' neighbours (see the module's notes)."""
     count = len(times_s)
-    step_s = float(np.median(np.diff(times_s)))
+    step_s = float(np.mean(np.diff(times_s)))
     i, j = np.triu_indices(count, reach + 1)
     lag = (j - i).astype(np.float64)
     multiple = np.maximum(np.rint(lag / lag0), 1.0)
@@ -265,7 +265,9 @@ def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int
             out[k] = _robust_cost(values[part] - predicted)
         return out
 
-    centre_s = lag0 * step_s
+    # photographs taken at irregular moments: the time a lag spans is its own mean, not lag x step
+    whole = int(round(lag0))
+    centre_s = float(np.mean(times_s[whole:] - times_s[:count - whole])) + (lag0 - whole) * step_s
     span_s = (reach + 1.0) * step_s
     coarse = np.linspace(centre_s - span_s, centre_s + span_s, COARSE_POINTS)
     coarse = coarse[coarse > reach * step_s]
