@@ -78,6 +78,8 @@ class Period:
             periods a few frames off (0..1).
         drift_s: how far apart the periods measured on the clip's first and second halves lie
             (a changing rate), seconds.
+        excess: what the best-matching pairs differ by beyond what their timing explains (0:
+            the same picture again; more: a merely similar view, as a car half a turn on).
     """
 
     period_s: float
@@ -88,6 +90,7 @@ class Period:
     likeness: float
     fit: float
     drift_s: float = 0.0
+    excess: float = 0.0
 
     def omega_rad_s(self, multiple: int = 1) -> tuple[float, float, float]:
         """The rate, and its 95% interval, if a turn takes ``multiple`` periods (rad/s)."""
@@ -230,8 +233,8 @@ def find_period(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: flo
                                    clock_resolution_s)) is not None]
     if not fits:
         return None
-    best = min(fit.likeness for fit in fits)
-    return min((fit for fit in fits if fit.likeness <= 2.0 * best + 0.02), key=lambda fit: fit.period_s)
+    best = min(fit.excess for fit in fits)
+    return min((fit for fit in fits if fit.excess <= 2.0 * best + 0.02), key=lambda fit: fit.period_s)
 
 
 def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int, reach: int,
@@ -255,14 +258,16 @@ def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int
     table = 0.5 * (shapes[i] + shapes[j])
     rows = np.arange(len(i))
 
+    def predicted_at(period: float, part: np.ndarray | slice = slice(None)) -> np.ndarray:
+        miss = np.abs(gap_s[part] - multiple[part] * period) / reach_s * (SHAPE_POINTS - 1)
+        low = np.minimum(miss.astype(int), SHAPE_POINTS - 2)
+        frac = np.minimum(miss - low, 1.0)
+        return table[rows[part], low] * (1 - frac) + table[rows[part], low + 1] * frac
+
     def costs(periods_s: np.ndarray, part: np.ndarray | slice = slice(None)) -> np.ndarray:
         out = np.empty(len(periods_s))
         for k, period in enumerate(periods_s):
-            miss = np.abs(gap_s[part] - multiple[part] * period) / reach_s * (SHAPE_POINTS - 1)
-            low = np.minimum(miss.astype(int), SHAPE_POINTS - 2)
-            frac = np.minimum(miss - low, 1.0)
-            predicted = table[rows[part], low] * (1 - frac) + table[rows[part], low + 1] * frac
-            out[k] = _robust_cost(values[part] - predicted)
+            out[k] = _robust_cost(values[part] - predicted_at(period, part))
         return out
 
     # photographs taken at irregular moments: the time a lag spans is its own mean, not lag x step
@@ -291,8 +296,12 @@ def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int
     minimum = float(costs(np.array([period_s]))[0])
     # how well the pictures match at the period: the closest pairs' difference, and the fit
     miss_s = np.abs(gap_s - multiple * period_s)
-    closest = values[miss_s <= max(0.5 * step_s, miss_s.min() + 1e-12)]
+    nearest = miss_s <= max(0.5 * step_s, miss_s.min() + 1e-12)
+    closest = values[nearest]
     likeness = float(np.mean(closest)) if len(closest) else math.inf
+    # what the closest pairs differ by beyond what their frames' timing explains: 0 for a true
+    # repeat whether it falls on a frame or between two, more for a merely similar view
+    excess = float(np.mean(np.maximum(closest - predicted_at(period_s)[nearest], 0.0))) if len(closest) else math.inf
     # the closest pairs against their frames' farthest neighbours, and how sharply the fit
     # prefers this period over those a few frames off
     apart = table[miss_s <= max(0.5 * step_s, miss_s.min() + 1e-12), -1]
@@ -314,7 +323,7 @@ def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int
     halves = [float(window[int(np.argmin(costs(window, part)))]) for part in (early, ~early) if part.sum() >= 3]
     drift_s = abs(halves[0] - halves[1]) if len(halves) == 2 else 0.0
     half_s = math.sqrt((1.96 * se_s) ** 2 + floor_s ** 2 + clock_s ** 2 + (0.5 * drift_s) ** 2)
-    return Period(period_s, period_s - half_s, period_s + half_s, repeats, count, likeness, fit, drift_s)
+    return Period(period_s, period_s - half_s, period_s + half_s, repeats, count, likeness, fit, drift_s, excess)
 
 
 def harmonic(period: Period, omega_rad_s: float, omega_low_rad_s: float, omega_high_rad_s: float,

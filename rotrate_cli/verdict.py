@@ -75,9 +75,12 @@ def _half_width(omega: float, low: float, high: float) -> float:
     return max(omega - low, high - omega) / omega
 
 
-def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0) -> Verdict:
+def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
+          doubts: tuple[str, ...] = ()) -> Verdict:
     """The reported rate from the tracks' combined rate (None: no track gave one) and the
-    clip's repetition (None: none seen); ``tracks_used`` tracks stand behind ``tracks``.
+    clip's repetition (None: none seen); ``tracks_used`` tracks stand behind ``tracks``;
+    ``doubts`` about the tracks' rate (a given fixation the tracks disagree with) make a
+    tracks-only result weak and are notes beside the repetition's.
 
     Raises:
         ValueError: neither measurement is given.
@@ -85,8 +88,8 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0) 
     if period is None:
         if tracks is None:
             raise ValueError("no measurement to judge")
-        return _tracks_only(tracks, tracks_used)
-    notes: list[str] = []
+        return _tracks_only(tracks, tracks_used, doubts)
+    notes: list[str] = list(doubts)
     weak: list[str] = []
     repeats = 1
     if tracks is not None and math.isfinite(tracks.omega_rad_s) and tracks.omega_rad_s > 0:
@@ -115,8 +118,8 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0) 
     return Verdict(omega, low, high, "repetition", repeats, "weak" if weak else "good", tuple(weak), tuple(notes))
 
 
-def _tracks_only(tracks: Combined, tracks_used: int) -> Verdict:
-    weak = []
+def _tracks_only(tracks: Combined, tracks_used: int, doubts: tuple[str, ...]) -> Verdict:
+    weak = list(doubts)
     if _half_width(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s) > WEAK_HALF_WIDTH:
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     if tracks_used < MIN_TRACKS:

@@ -1,0 +1,119 @@
+"""The rate from the clip's repetition (:mod:`rotrate_cli.period`) and how it is weighed with
+the tracks' (:mod:`rotrate_cli.verdict`), on pictures of a turning texture with known periods."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from rotrate_cli.decode import Frame
+from rotrate_cli.outliers import Combined
+from rotrate_cli.period import Thumbnails, find_period
+from rotrate_cli.verdict import judge
+
+
+def _turning(times_s: np.ndarray, period_s: float, symmetry: int = 1, size: int = 96, seed: int = 7) -> Thumbnails:
+    """A textured disk turning about the picture's centre, one frame per time, in thumbnails.
+    ``symmetry``: the texture repeats that many times a turn."""
+    rng = np.random.default_rng(seed)
+    base = cv2.GaussianBlur(rng.uniform(0, 255, (size, size)).astype(np.float32), (0, 0), 2.0)
+    if symmetry > 1:
+        centre = ((size - 1) / 2.0, (size - 1) / 2.0)
+        base = sum(cv2.warpAffine(base, cv2.getRotationMatrix2D(centre, 360.0 * k / symmetry, 1.0), (size, size))
+                   for k in range(symmetry)) / symmetry
+    yy, xx = np.mgrid[:size, :size]
+    disk = (xx - (size - 1) / 2.0) ** 2 + (yy - (size - 1) / 2.0) ** 2 <= (0.45 * size) ** 2
+    thumbnails = Thumbnails()
+    frames = []
+    for index, time_s in enumerate(times_s):
+        matrix = cv2.getRotationMatrix2D(((size - 1) / 2.0, (size - 1) / 2.0), 360.0 * time_s / period_s, 1.0)
+        turned = cv2.warpAffine(base, matrix, (size, size), flags=cv2.INTER_LINEAR)
+        image = np.where(disk, turned, 90.0).clip(0, 255).astype(np.uint8)
+        frames.append(Frame(index, float(time_s), image))
+    for _ in thumbnails.tap(iter(frames)):
+        pass
+    return thumbnails
+
+
+@pytest.mark.parametrize(("period_s", "duration_s"), [(1.7696, 8.0), (2.9, 7.0)])
+def test_several_turns_of_a_video(period_s: float, duration_s: float) -> None:
+    times = np.arange(0.0, duration_s, 1 / 23.976)
+    thumbnails = _turning(times, period_s)
+    found = find_period(thumbnails.times_s, thumbnails.images)
+    assert found is not None
+    assert found.period_s == pytest.approx(period_s, rel=0.003)
+    assert found.period_low_s <= period_s <= found.period_high_s
+    assert found.repeats >= 2
+
+
+def test_one_turn_of_photographs_at_irregular_moments() -> None:
+    """A turntable photographed by hand: 100 pictures of one turn at irregular times (as the EPFL
+    cars); the turn closes between the last picture and the first, and the times place it."""
+    rng = np.random.default_rng(3)
+    steps = rng.uniform(0.6, 1.6, 100)
+    times = np.r_[0.0, np.cumsum(steps)]
+    period_s = float(times[-1])  # the 101st picture would be back at the start
+    thumbnails = _turning(times[:-1], period_s)
+    found = find_period(thumbnails.times_s, thumbnails.images)
+    assert found is not None
+    assert found.repeats == 1
+    assert found.period_s == pytest.approx(period_s, rel=0.01)
+    assert found.period_low_s <= period_s <= found.period_high_s
+
+
+def test_under_a_turn_has_no_repetition() -> None:
+    times = np.arange(0.0, 6.0, 1 / 30)
+    thumbnails = _turning(times, 10.0)  # 0.6 turn
+    assert find_period(thumbnails.times_s, thumbnails.images) is None
+
+
+def test_nothing_moving_has_no_repetition() -> None:
+    times = np.arange(0.0, 4.0, 1 / 30)
+    thumbnails = _turning(times, 1e9)
+    assert find_period(thumbnails.times_s, thumbnails.images) is None
+
+
+def test_a_symmetric_object_takes_the_number_of_repeats_from_the_tracks() -> None:
+    """Three-fold texture: the picture repeats three times a turn. Tracks saying about the turn's
+    rate (with an interval) pick three repeats a turn; without tracks the repeat is reported."""
+    period_s = 3.0
+    times = np.arange(0.0, 7.0, 1 / 30)
+    thumbnails = _turning(times, period_s, symmetry=3)
+    found = find_period(thumbnails.times_s, thumbnails.images)
+    assert found is not None
+    assert found.period_s == pytest.approx(period_s / 3, rel=0.01)
+    omega = 2 * math.pi / period_s
+    verdict = judge(Combined(omega * 1.03, omega * 0.95, omega * 1.1, 40), found, 40)
+    assert verdict.repeats_per_turn == 3
+    assert verdict.omega_rad_s == pytest.approx(omega, rel=0.01)
+    assert verdict.rate_from == "repetition" and verdict.quality == "good"
+    alone = judge(None, found)
+    assert alone.omega_rad_s == pytest.approx(3 * omega, rel=0.01)
+
+
+def test_verdict_on_tracks_alone() -> None:
+    good = judge(Combined(0.6, 0.598, 0.603, 300), None, 300)
+    assert (good.quality, good.rate_from, good.weak_because) == ("good", "tracks", ())
+    wide = judge(Combined(0.6, 0.5, 0.7, 300), None, 300)
+    assert wide.quality == "weak" and "wider than" in wide.weak_because[0]
+    few = judge(Combined(0.6, 0.598, 0.603, 2), None, 2)
+    assert few.quality == "weak" and "2 track" in few.weak_because[0]
+    doubted = judge(Combined(0.6, 0.598, 0.603, 300), None, 300, ("the fixation is off",))
+    assert doubted.quality == "weak"
+
+
+def test_verdict_prefers_the_repetition_when_the_tracks_disagree_far() -> None:
+    times = np.arange(0.0, 8.0, 1 / 30)
+    found = find_period(*_arrays(_turning(times, 2.0)))
+    assert found is not None
+    verdict = judge(Combined(0.2, 0.19, 0.21, 50), found, 50)  # tracks 15x off, confidently
+    assert verdict.rate_from == "repetition" and verdict.repeats_per_turn == 1
+    assert verdict.omega_rad_s == pytest.approx(math.pi, rel=0.005)
+    assert any("disagrees" in note for note in verdict.notes)
+
+
+def _arrays(thumbnails: Thumbnails) -> tuple[np.ndarray, np.ndarray]:
+    return thumbnails.times_s, thumbnails.images
