@@ -86,7 +86,7 @@ def test_a_symmetric_object_takes_the_number_of_repeats_from_the_tracks() -> Non
     assert found is not None
     assert found.period_s == pytest.approx(period_s / 3, rel=0.01)
     omega = 2 * math.pi / period_s
-    verdict = judge(Combined(omega * 1.03, omega * 0.95, omega * 1.1, 40), found, 40)
+    verdict = judge(Combined(omega * 1.02, omega * 0.98, omega * 1.05, 40), found, 40)
     assert verdict.repeats_per_turn == 3
     assert verdict.omega_rad_s == pytest.approx(omega, rel=0.01)
     assert verdict.rate_from == "repetition" and verdict.quality == "good"
@@ -109,7 +109,7 @@ def test_verdict_prefers_the_repetition_when_the_tracks_disagree_far() -> None:
     times = np.arange(0.0, 8.0, 1 / 30)
     found = find_period(*_arrays(_turning(times, 2.0)))
     assert found is not None
-    verdict = judge(Combined(0.2, 0.19, 0.21, 50), found, 50)  # tracks 15x off, confidently
+    verdict = judge(Combined(0.2, 0.196, 0.204, 50), found, 50)  # tracks 15x off, confidently
     assert verdict.rate_from == "repetition" and verdict.repeats_per_turn == 1
     assert verdict.omega_rad_s == pytest.approx(math.pi, rel=0.005)
     assert any("disagrees" in note for note in verdict.notes)
