@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow lint bench bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-fov-auto clean
+.PHONY: demo test test-slow lint bench bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -36,7 +36,7 @@ bench: $(STAMP)
 bench-real: $(STAMP)
 	$(BIN)/python benchmarks/bench_real.py
 
-## bench-accuracy: the paper's method vs ours on 17 rendered conditions with known rates (renders cached)
+## bench-accuracy: the paper's method vs ours on 17 rendered conditions with known rates, no lens given (renders cached)
 bench-accuracy: $(STAMP)
 	$(BIN)/python benchmarks/bench_accuracy.py
 
@@ -48,9 +48,9 @@ bench-accuracy-paths: $(STAMP)
 bench-accuracy-csrt: $(STAMP)
 	$(BIN)/python benchmarks/bench_accuracy.py --tracker csrt
 
-## bench-accuracy-fov-auto: the same suite with no field of view given: found from the tracks (--fov auto)
-bench-accuracy-fov-auto: $(STAMP)
-	$(BIN)/python benchmarks/bench_accuracy.py --fov-auto
+## bench-accuracy-given-fov: the same suite with the perspective clips' true field of view given (--fov DEG)
+bench-accuracy-given-fov: $(STAMP)
+	$(BIN)/python benchmarks/bench_accuracy.py --given-fov
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache bench_out

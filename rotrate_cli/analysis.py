@@ -97,8 +97,10 @@ class AnalysisConfig:
             (and no ``focal_px``) treats the view as orthographic, as the paper does.
         focal_px: the focal length in pixels, instead of ``fov_deg``.
         find_focal: find the focal length (and the camera's elevation) from the tracks' motion
-            in both image directions (:mod:`rotrate_cli.focal`; ``--fov auto``), instead of
-            ``fov_deg``/``focal_px``; a view with no measurable perspective stays orthographic.
+            in both image directions (:mod:`rotrate_cli.focal`; the default, ``--fov auto``)
+            where no lens is given (``fov_deg``/``focal_px``, or the photographs' EXIF); a view
+            with no measurable perspective stays orthographic. False (``--fov ortho``): the
+            paper's orthographic camera. Not for ``segment``, chosen points or the paper's method.
         tracker: tracking settings.
         rejection: outlier-rejection thresholds.
         window_s: also measure omega(t) over a sliding window this long (None: not).
@@ -125,7 +127,7 @@ class AnalysisConfig:
     method: str = "fit"
     fov_deg: float | None = None
     focal_px: float | None = None
-    find_focal: bool = False
+    find_focal: bool = True
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
     rejection: RejectionConfig = field(default_factory=RejectionConfig)
     window_s: float | None = None
@@ -286,18 +288,13 @@ def _check_config(config: AnalysisConfig) -> None:
         if not (math.isfinite(config.elevation_deg) and -80 <= config.elevation_deg <= 80):
             raise InputError("--elevation must be between -80 and 80 degrees")
         if config.fov_deg is None and config.focal_px is None and not config.find_focal:
-            raise InputError("--elevation is for the pinhole model: give --fov or --focal-px too")
+            raise InputError("--elevation is for the pinhole model: drop --fov ortho, or give --fov or --focal-px")
     if config.tracker_kind not in TRACKERS:
         raise InputError(f"--tracker must be one of {', '.join(TRACKERS)}; got {config.tracker_kind!r}")
     if config.segment and config.fixation_px is not None:
         raise InputError("--segment finds each body's axis itself; drop --fixation (or use --fixation auto)")
     if config.segment and config.window_s is not None:
         raise InputError("--window follows one body; it cannot be combined with --segment")
-    if config.find_focal and (config.fov_deg is not None or config.focal_px is not None):
-        raise InputError("--fov auto finds the focal length: drop --focal-px")
-    if config.find_focal and (config.segment or config.points_px or config.method == "paper"):
-        raise InputError("--fov auto needs many automatic tracks on one body: it cannot be combined with "
-                         "--segment, --track or --method paper")
     if config.method == "paper" and (config.fov_deg is not None or config.focal_px is not None):
         raise InputError("--method paper is orthographic, as in the paper; drop --fov/--focal-px or use --method fit")
 
@@ -450,8 +447,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     info = video.info
     warnings_early: list[str] = list(video.warnings)
     camera_from = "given" if config.fov_deg is not None or config.focal_px is not None else "orthographic"
-    if (camera_from == "orthographic" and info.focal_px is not None and not config.find_focal
-            and config.method == "fit"):
+    if camera_from == "orthographic" and info.focal_px is not None and config.find_focal and config.method == "fit":
         config = replace(config, focal_px=info.focal_px)  # the photographs' own lens
         camera_from = "exif"
     if config.fixation_px is not None:
@@ -540,16 +536,22 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
             raise
         return _repetition_only(period, config, warnings, kept, context)
     focal = None
-    if config.find_focal:
-        config, focal, found = _find_focal(everything, body, angle, config, size_px)
-        warnings.extend(found)
-        if focal is not None and math.isfinite(focal.focal_px):
-            context["elevation_deg"] = focal.elevation_deg
+    # the lens is sought only where the tracks' rate is what is reported: a clip that repeats is
+    # measured by its repetition, which needs no model of the camera (and the search costs
+    # seconds on a 720p clip)
+    if (config.find_focal and camera_from == "orthographic" and config.method == "fit" and not config.points_px
+            and period is None):
+        config, focal = _find_focal(everything, body, angle, config, size_px)
+        if focal is not None:
             context["camera_from"] = "found"
+            if math.isfinite(focal.focal_px):
+                context["elevation_deg"] = focal.elevation_deg
     del everything  # the offsets hold what is needed: a long clip's positions need not stay
     release_free_memory()
     fixation, result, camera = _measure_body(body, angle, config, size_px)
     del body
+    if focal is not None and math.isfinite(focal.focal_px) and result.combined.tracks_used > 0:
+        result = _with_lens_doubt(result, focal, fixation, angle, config, size_px)
     if result.combined.tracks_used == 0 and period is not None:
         return _repetition_only(period, config, warnings, kept, context, result)
     doubts = ()
@@ -592,22 +594,40 @@ def _repetition_only(period: Period, config: AnalysisConfig, warnings: list[str]
                    warnings=tuple(notes), series=None, tracks=kept, focal=None, period=period, **context)
 
 
+def _with_lens_doubt(result: RateResult, focal: FocalEstimate, fixation: tuple[float, float], angle_deg: float,
+                     config: AnalysisConfig, size_px: tuple[int, int]) -> RateResult:
+    """The result with its interval widened to hold the rates measured through the lenses at the
+    ends of the found lens's 95% interval (its inverse focal length +-1.96 standard errors; 0 is
+    orthographic): a lens found a few degrees wide moves the rate by about as much as the
+    tracks' scatter (rendered sphere through 20 degrees, found 26.8: -2.0%, interval +-0.8%)."""
+    rates_at_ends = []
+    for inverse in (focal.inverse_focal - 1.96 * focal.inverse_focal_se,
+                    focal.inverse_focal + 1.96 * focal.inverse_focal_se):
+        lens = replace(config, focal_px=1.0 / inverse if inverse > 0 else None,
+                       fov_deg=None if inverse > 0 else config.fov_deg)
+        camera = _camera(lens, size_px, fixation, angle_deg)
+        rates_at_ends.append(rates_from_offsets(result.offsets, config.method, config.rejection, camera)
+                             .combined.omega_rad_s)
+    combined = result.combined
+    low = float(np.nanmin([combined.omega_low_rad_s, *rates_at_ends]))
+    high = float(np.nanmax([combined.omega_high_rad_s, *rates_at_ends]))
+    return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
+
+
 def _find_focal(everything: pd.DataFrame, body: _Prepared, angle: float, config: AnalysisConfig,
-                size_px: tuple[int, int]) -> tuple[AnalysisConfig, FocalEstimate | None, list[str]]:
-    """``--fov auto``: the focal length (and elevation) from the tracks, put into the
-    configuration as if given; orthographic when no perspective shows."""
+                size_px: tuple[int, int]) -> tuple[AnalysisConfig, FocalEstimate | None]:
+    """The focal length (and elevation) from the tracks, put into the configuration as if
+    given; orthographic when no perspective shows, or when too few tracks turn far enough to
+    tell (the estimate is then None)."""
     omega = axes.rate_from_recurrence(everything, axes.offsets_along(everything, body.fixation_px, angle))
     estimate = None
     if math.isfinite(omega) and omega > 0:
         estimate = estimate_focal(everything, body.fixation_px, angle, omega, size_px,
                                   config.elevation_deg if config.elevation_deg is not None else 0.0)
-    if estimate is None:
-        return config, None, ["too few tracks turned far enough to find the focal length: measured as "
-                              "orthographic (give --fov DEG)"]
-    if not math.isfinite(estimate.focal_px):
-        return config, estimate, []
+    if estimate is None or not math.isfinite(estimate.focal_px):
+        return config, estimate
     elevation = config.elevation_deg if config.elevation_deg is not None else estimate.elevation_deg
-    return replace(config, focal_px=estimate.focal_px, elevation_deg=elevation), estimate, []
+    return replace(config, focal_px=estimate.focal_px, elevation_deg=elevation), estimate
 
 
 def running_rate(analysis: Analysis, step_s: float | None = None) -> pd.DataFrame:

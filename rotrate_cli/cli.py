@@ -275,6 +275,9 @@ def analyze_command(
                 raise InputError("--series-csv needs --window SECONDS")
             check_output_path(series_csv_path, force)
         fov_deg, find_focal = parse_fov(fov)
+        if fov is not None and fov.strip().lower() == "auto" and (focal_px is not None or method == "paper"):
+            raise InputError("--fov auto finds the lens from the tracks: drop --focal-px (a given lens) or use "
+                             "--method fit (the paper's method is orthographic)")
         frame_times = None if times is None else tuple(float(t) for t in read_times(times))
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
                                 times_s=frame_times,

@@ -80,19 +80,21 @@ class FocalEstimate:
 
 
 def parse_fov(text: str | None, where: str = "--fov") -> tuple[float | None, bool]:
-    """``--fov``'s value: degrees, ``auto`` (find it: ``(None, True)``), or None (not given).
+    """``--fov``'s value as ``(degrees or None, find the focal length)``: degrees (given),
+    ``auto`` or not given (found from the tracks: ``(None, True)``), ``ortho`` (the paper's
+    orthographic camera, forced: ``(None, False)``).
 
     Raises:
         InputError: anything else.
     """
-    if text is None:
-        return None, False
-    if text.strip().lower() == "auto":
+    if text is None or text.strip().lower() == "auto":
         return None, True
+    if text.strip().lower() in ("ortho", "orthographic"):
+        return None, False
     try:
         return float(text), False
     except ValueError:
-        raise InputError(f"{where}: the field of view must be degrees or auto; got {text!r}") from None
+        raise InputError(f"{where}: the field of view must be degrees, auto or ortho; got {text!r}") from None
 
 
 def _choose(tracks: pd.DataFrame, omega_rad_s: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:

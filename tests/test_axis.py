@@ -295,5 +295,5 @@ def test_pinhole_camera_seen_from_above(tmp_path: Path) -> None:
 
 def test_elevation_needs_the_pinhole_model() -> None:
     result = CliRunner().invoke(app, ["analyze", str(SAMPLES / "box_ortho.mp4"), "--fixation", "auto",
-                                      "--elevation", "20"])
+                                      "--fov", "ortho", "--elevation", "20"])
     assert result.exit_code == 2 and "--fov or --focal-px" in result.stderr

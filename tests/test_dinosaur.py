@@ -43,11 +43,13 @@ def test_dinosaur_axis_and_camera_from_the_paths() -> None:
 def test_dinosaur_focal_length_found_from_the_tracks() -> None:
     """--fov auto on real photographs: the lens and the camera's height are found from the
     tracks' vertical motion (17.7 degrees, looking down by 26.9; the notes say about 30), and
-    omega lands within 1% (-0.31%) with no guess at the lens."""
+    omega lands within 1% (-0.31%) with no guess at the lens. The first 34 pictures (330
+    degrees): the whole turn would be measured by its repetition, which needs no lens."""
     need(DINOSAUR / "frames", "the dinosaur photographs")
     truth = json.loads((DINOSAUR / "truth.json").read_text())
     result = analyze(DINOSAUR / "frames", AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), fps=1.0,
-                                                         find_focal=True))
+                                                         end_s=33.0))
+    assert result.rate_from == "tracks" and result.camera_from == "found"
     assert result.focal is not None and 12.0 < result.focal.fov_deg < 25.0
     assert 20.0 < result.elevation_deg < 35.0
     assert result.omega_rad_s == pytest.approx(truth["radians_per_frame"], rel=0.01)

@@ -81,11 +81,13 @@ def test_too_few_tracks_give_none() -> None:
 
 
 def test_parse_fov() -> None:
-    assert parse_fov(None) == (None, False)
+    assert parse_fov(None) == (None, True)  # the lens is found by default
     assert parse_fov("auto") == (None, True)
     assert parse_fov(" AUTO ") == (None, True)
+    assert parse_fov("ortho") == (None, False)
+    assert parse_fov("orthographic") == (None, False)
     assert parse_fov("25") == (25.0, False)
-    with pytest.raises(InputError, match="degrees or auto"):
+    with pytest.raises(InputError, match="degrees, auto or ortho"):
         parse_fov("wide")
 
 

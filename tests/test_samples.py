@@ -54,9 +54,13 @@ def test_perspective_sample_with_the_pinhole_model() -> None:
     clip = SAMPLES / "box_perspective.mp4"
     truth = truth_of(clip)
     fixation = tuple(truth["fixation_px"])
-    plain = analyze(clip, AnalysisConfig(fixation_px=fixation))
+    plain = analyze(clip, AnalysisConfig(fixation_px=fixation, find_focal=False))  # --fov ortho
     corrected = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=truth["scene"]["fov_deg"]))
+    found = analyze(clip, AnalysisConfig(fixation_px=fixation))  # the default: the lens found
     assert abs(plain.omega_rad_s / truth["omega_rad_s"] - 1) > 0.03  # what perspective costs the paper's model
+    assert plain.camera_from == "orthographic" and found.camera_from == "found"
+    assert found.omega_rad_s == pytest.approx(truth["omega_rad_s"], rel=0.01)
+    assert found.omega_low_rad_s <= truth["omega_rad_s"] <= found.omega_high_rad_s
     assert corrected.omega_rad_s == pytest.approx(truth["omega_rad_s"], rel=0.01)
     assert corrected.omega_low_rad_s <= truth["omega_rad_s"] <= corrected.omega_high_rad_s
     assert corrected.direction == truth["direction"]
