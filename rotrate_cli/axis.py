@@ -275,10 +275,12 @@ def _weighted_median(values: np.ndarray, weight: np.ndarray) -> float:
     return float(values[order][np.searchsorted(cumulative, cumulative[-1] / 2)])
 
 
-def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, camera: Camera | None = None) -> float:
+def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, camera: Camera | None = None,
+                       alpha_rad_s2: float = 0.0, t0_s: float = 0.0) -> float:
     """The shared axis offset that, with each track's own amplitude and phase, best explains
-    ``samples`` (``track, time_s, offset_px`` sorted by track then time) at ``omega_rad_s``:
-    the correction to add to the fixation's position along the offset direction.
+    ``samples`` (``track, time_s, offset_px`` sorted by track then time) turning at
+    ``omega_rad_s`` at time ``t0_s`` and speeding up by ``alpha_rad_s2`` (0: steady): the
+    correction to add to the fixation's position along the offset direction.
 
     Per track, with ``P`` the projection on its two columns, the least squares of
     ``offset - o ~ a first + b second`` over a shared ``o`` is
@@ -290,9 +292,11 @@ def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, camera: Camera
     columns that depend on the data but not on ``o``.
     """
     tracks = Ragged.from_samples(samples)
-    if len(tracks) == 0 or not math.isfinite(omega_rad_s):
+    if len(tracks) == 0 or not (math.isfinite(omega_rad_s) and math.isfinite(alpha_rad_s2)):
         return math.nan
-    angle = omega_rad_s * tracks.times_s
+    # a steady rate, or one changing steadily (a spin-up): the turn's angle at each time
+    elapsed = tracks.times_s - t0_s
+    angle = omega_rad_s * elapsed + 0.5 * alpha_rad_s2 * elapsed ** 2
     c, s_ = np.cos(angle)[tracks.time_index], np.sin(angle)[tracks.time_index]
     y = tracks.offset
     scale = 1.0

@@ -43,6 +43,9 @@ NEAR_FACTOR = 1.1
 #: Beyond this many repeats a turn, whole numbers lie so close that being near one says nothing.
 MOST_SYMMETRY = 6
 
+#: Halves of the clip whose repeats differ by more than this fraction show a changing rate.
+CHANGE_FRACTION = 0.01
+
 RATE_SOURCES = ("tracks", "repetition")
 QUALITIES = ("good", "weak")
 
@@ -116,6 +119,9 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                     notes.append(f"the picture repeats {repeats} times a turn (a symmetric object); "
                                  "the tracks' rate tells which")
     omega, low, high = period.omega_rad_s(repeats)
+    if period.drift_s > CHANGE_FRACTION * period.period_s:
+        notes.append(f"the rate changes over the clip (its halves repeat {period.drift_s / period.period_s:.1%} "
+                     "apart); the result is an average: see omega(t) with --window SECONDS")
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH:
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, "repetition", repeats, "weak" if weak else "good", tuple(weak), tuple(notes))

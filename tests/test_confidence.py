@@ -1,0 +1,58 @@
+"""Honest confidence: a changing rate is said (and its axis still found), a given fixation the
+tracks disagree with is named, and steady clips stay quiet."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rotrate_cli.analysis import AnalysisConfig, analyze
+from rotrate_cli.synth import SceneConfig, write_clip
+from tests.conftest import SAMPLES, truth_of
+
+
+def _changes(warnings: tuple[str, ...]) -> bool:
+    return any("the rate changes over the clip" in warning and "--window" in warning for warning in warnings)
+
+
+def test_spin_up_sample_is_said_and_its_axis_found() -> None:
+    """box_spinup.mp4: 0.3 + 0.15 t rad/s. Before: the axis 10 px off and no word of the change."""
+    clip = SAMPLES / "box_spinup.mp4"
+    truth = truth_of(clip)
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None))
+    assert _changes(analysis.warnings)
+    assert analysis.quality == "weak"
+    assert analysis.fixation_px[0] == pytest.approx(truth["fixation_px"][0], abs=2.0)
+
+
+@pytest.mark.slow  # rendering takes 12 s a clip: make test-slow
+@pytest.mark.parametrize(("shape", "within_px"), [("box", 2.0), ("cylinder", 3.0)])
+def test_rendered_spin_up(tmp_path: Path, shape: str, within_px: float) -> None:
+    """0.35 + 0.12 t rad/s over 6 s at 15 fps. Measured: the box's axis 0.5 px off, the cylinder's 2.7 px
+    (the 2 px aim is not reached there; one rate for all tracks put it 10 px off)."""
+    clip = tmp_path / "spin.mp4"
+    truth = write_clip(SceneConfig(shape=shape, omega_rad_s=0.35, alpha_rad_s2=0.12, duration_s=6.0,
+                                   fps=15.0, width_px=480, height_px=270, seed=21), clip)
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None))
+    assert _changes(analysis.warnings)
+    assert analysis.fixation_px[0] == pytest.approx(truth["fixation_px"][0], abs=within_px)
+
+
+@pytest.mark.parametrize("name", ["box_ortho.mp4", "cylinder_ortho.mp4"])
+def test_steady_clips_stay_quiet(name: str) -> None:
+    analysis = analyze(SAMPLES / name, AnalysisConfig(fixation_px=None))
+    assert not _changes(analysis.warnings)
+    assert analysis.quality == "good" and analysis.warnings == ()
+
+
+def test_a_given_fixation_off_the_axis_is_named() -> None:
+    """40 px off: -13% before, without a word; now the found axis is named and the result weak."""
+    clip = SAMPLES / "box_ortho.mp4"
+    analysis = analyze(clip, AnalysisConfig(fixation_px=(359.5, 179.5)))
+    named = [w for w in analysis.warnings if "the tracks turn about an axis through (" in w]
+    assert named and analysis.quality == "weak"
+    found_x = float(named[0].split("(")[1].split(",")[0])
+    assert found_x == pytest.approx(319.5, abs=3.0)
+    right = analyze(clip, AnalysisConfig(fixation_px=(319.5, 179.5)))
+    assert right.quality == "good" and not right.warnings
