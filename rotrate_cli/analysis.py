@@ -1037,7 +1037,8 @@ def analyze_tracks(
     # Given tracks are taken at their word: no tracker-jitter floor, and 5 samples (the fewest
     # that leave the three-parameter fit two degrees of freedom) are a track; published tracks
     # are often sparse keyframes (the dinosaur's: most span 5-7 views 10 degrees apart).
-    rules = rejection if rejection is not None else RejectionConfig(min_samples=5, min_range=0.0, residual_floor=0.0)
+    rules = rejection if rejection is not None else RejectionConfig(min_samples=5, min_range=0.0, residual_floor=0.0,
+                                                                                min_motion_ratio=0.0)
     result = rates_from_offsets(offsets[["track", "frame", "time_s", "offset_px"]], method, rules)
     return _result(result, source=source, fps=float(fps), frames=int(table["frame"].nunique()),
                    duration_s=float(table["time_s"].max() - table["time_s"].min()),

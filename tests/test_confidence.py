@@ -56,3 +56,13 @@ def test_a_given_fixation_off_the_axis_is_named() -> None:
     assert found_x == pytest.approx(319.5, abs=3.0)
     right = analyze(clip, AnalysisConfig(fixation_px=(319.5, 179.5)))
     assert right.quality == "good" and not right.warnings
+
+
+def test_a_chosen_point_that_does_not_move_is_rejected() -> None:
+    """--track 50,50 on the background: CSRT's jitter (2.5 px, 0.34 px misfit) once read 0.018
+    rad/s with a tight interval and exit 0; now it is static, and there is no result."""
+    from rotrate_cli.errors import NoResultError
+
+    with pytest.raises(NoResultError, match="1 static"):
+        analyze(SAMPLES / "box_ortho.mp4", AnalysisConfig(fixation_px=(319.5, 179.5), points_px=((50.0, 50.0),),
+                                                         tracker_kind="csrt"))
