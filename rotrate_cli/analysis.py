@@ -22,7 +22,7 @@ from rotrate_cli.chosen import TRACKERS, follow_points
 from rotrate_cli.csrt import CsrtTracker, csrt_settings
 from rotrate_cli.decode import FrameSource, prefetch
 from rotrate_cli.errors import InputError, NoResultError
-from rotrate_cli.focal import FocalEstimate, estimate_focal
+from rotrate_cli.focal import ORTHOGRAPHIC_WIDTHS, FocalEstimate, estimate_focal
 from rotrate_cli.joint import joint_fit
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import (
@@ -614,7 +614,10 @@ def _with_lens_doubt(result: RateResult, focal: FocalEstimate, fixation: tuple[f
     at least +-:data:`LENS_FLOOR` of it; 0 is orthographic)."""
     rates_at_ends = []
     half = max(1.96 * focal.inverse_focal_se, LENS_FLOOR * focal.inverse_focal)
-    for inverse in (focal.inverse_focal - half, focal.inverse_focal + half):
+    lower = focal.inverse_focal - half
+    if lower < 1.0 / (ORTHOGRAPHIC_WIDTHS * size_px[0]):
+        lower = 0.0  # within its uncertainty of a lens called orthographic: the paper's model is as likely
+    for inverse in (lower, focal.inverse_focal + half):
         lens = replace(config, focal_px=1.0 / inverse if inverse > 0 else None,
                        fov_deg=None if inverse > 0 else config.fov_deg)
         camera = _camera(lens, size_px, fixation, angle_deg)

@@ -39,8 +39,8 @@ from rotrate_cli.errors import InputError
 
 #: Tracks and samples per track the fit uses: the longest tracks, evenly thinned. The shared
 #: unknowns are three; more data than this narrows them little and costs time.
-MAX_TRACKS = 80
-MAX_SAMPLES_PER_TRACK = 16
+MAX_TRACKS = 160
+MAX_SAMPLES_PER_TRACK = 24
 #: A track must turn through this much (rad) to say anything about its ellipse.
 MIN_TURN_RAD = 0.3
 #: Samples whose offset across the line of sight exceeds this fraction of their radius (turned
