@@ -565,7 +565,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     if result.combined.tracks_used == 0 and period is not None:
         return _repetition_only(period, config, warnings, kept, context, result)
     doubts: tuple[str, ...] = ()
-    if config.fixation_px is not None:
+    if config.fixation_px is not None and period is None:  # the repetition's rate needs no axis
         doubt = _fixation_doubt(result, camera, fixation, angle, config, size_px)
         doubts = () if doubt is None else (doubt,)
     change = _rate_change(result, config, camera) if period is None else None
@@ -800,7 +800,7 @@ def _fixation_doubt(result: RateResult, camera: rates.Camera | None, fixation: t
         return None
     ux, uy = axes.unit_offset(angle_deg)
     found = (fixation[0] + shift * ux, fixation[1] + shift * uy)
-    moved = result.offsets.assign(offset_px=result.offsets["offset_px"].to_numpy() - shift)
+    moved = offsets.assign(offset_px=offsets["offset_px"].to_numpy() - shift)  # the inliers: memory
     again = rates_from_offsets(moved, config.method, config.rejection, _camera(config, size_px, found, angle_deg))
     rate, combined = again.combined.omega_rad_s, result.combined
     width = combined.omega_high_rad_s - combined.omega_low_rad_s

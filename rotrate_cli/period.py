@@ -58,7 +58,7 @@ SAME_PICTURE = 0.02
 #: Residuals of the differences (in typical differences) are capped here in the fit.
 CAP = 0.3
 #: Points of the tabulated neighbour shape; period candidates scanned coarsely, then finely.
-SHAPE_POINTS = 48
+SHAPE_POINTS = 32
 COARSE_POINTS = 81
 FINE_POINTS = 21
 #: The fit uses at most this many pairs of frames (evenly spread over the lags).
@@ -168,7 +168,7 @@ def _neighbour_shapes(diff: np.ndarray, times_s: np.ndarray, reach: int, grid_s:
     ``grid_s`` (piecewise linear through the measured points and 0 at 0, made non-decreasing,
     flat beyond the last): one row per frame."""
     count = len(times_s)
-    shapes = np.empty((count, len(grid_s)))
+    shapes = np.empty((count, len(grid_s)), dtype=np.float32)  # one row per pair later: kept small
     for i in range(count):
         near = [j for j in range(i - reach, i + reach + 1) if 0 <= j < count and j != i]
         gaps = np.abs(times_s[near] - times_s[i])
@@ -298,7 +298,9 @@ def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int
     if reach not in cache:
         cache[reach] = _neighbour_shapes(diff, times_s, reach + 1, grid_s)
     shapes = cache[reach]
-    table = 0.5 * (shapes[i] + shapes[j])
+    table = shapes[i]  # float32, a fresh copy: the pairs' mean neighbour shape, in place
+    table += shapes[j]
+    table *= 0.5
     rows = np.arange(len(i))
 
     def predicted_at(period: float, part: np.ndarray | slice = slice(None)) -> np.ndarray:
