@@ -1,0 +1,210 @@
+"""The rate stage: offsets from the axis -> per-track sinusoid fits -> verdicts -> the combined
+rate with its 95% interval (:func:`rates_from_offsets`), and the rates of a clip's two halves (a
+rate that changes over the clip)."""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from rotrate_cli import rates
+from rotrate_cli.config import AnalysisConfig
+from rotrate_cli.joint import joint_fit
+from rotrate_cli.memory import release_free_memory
+from rotrate_cli.outliers import (
+    Combined,
+    RejectionConfig,
+    combine,
+    combine_plain,
+    flag_samples,
+    judge_fits,
+    judge_paper,
+)
+
+#: Below this many inlier tracks the summary is the random-effects mean of per-track rates
+#: rather than the joint fit: the joint fit's gain (no small-track bias) needs many tracks, its
+#: jackknife interval needs enough of them to see their spread, and with a handful one track's
+#: model error would steer it (the paper's two hand-tracked features: 0.309 joint, 0.334 mean).
+JOINT_MIN_TRACKS = 10
+
+
+#: Halves of a clip whose rates lie outside each other's intervals and this fraction apart show
+#: a changing rate.
+CHANGE_FRACTION = 0.02
+
+
+#: Degrees of freedom given to the typical track noise when moderating each track's own.
+PRIOR_DOF = 10.0
+
+
+@dataclass(frozen=True)
+class RateResult:
+    """What the rate stages produce from a table of offsets."""
+
+    offsets: pd.DataFrame
+    features: pd.DataFrame
+    combined: Combined
+    direction: str
+
+
+def thin(tracks: pd.DataFrame, every: int) -> pd.DataFrame:
+    """Every ``every``-th frame's rows, counted from the first frame (the paper's sampling)."""
+    if every == 1 or tracks.empty:
+        return tracks
+    first = int(tracks["frame"].min())
+    return tracks[(tracks["frame"] - first) % every == 0]
+
+
+def _direction(offsets: pd.DataFrame, features: pd.DataFrame) -> str:
+    """Sense of rotation, given only on a clear majority of the inlier tracks.
+
+    With a pinhole camera each track's fit says which sense explains it (near points move
+    faster). Otherwise: the net horizontal travel. An opaque object shows its near side, whose
+    points cross in front of the axis: moving right means anticlockwise seen from above.
+    Far-side points (a transparent object, a turntable's top seen from above) travel the other
+    way, hence the majority rule.
+    """
+    inliers = features[features["inlier"]]
+    used = set(inliers["track"].astype(int))
+    if len(used) < 5:
+        return "unknown"
+    senses = inliers["sense"].dropna().to_numpy()
+    if len(senses) >= 5:
+        vote = float(senses.mean())
+        return "ccw" if vote >= 0.6 else "cw" if vote <= -0.6 else "unknown"
+    # offsets are sorted by track then time: a track's first and last rows bound its slice
+    tracks = offsets["track"].to_numpy()
+    values = offsets["offset_px"].to_numpy()
+    starts = np.flatnonzero(np.r_[True, tracks[1:] != tracks[:-1]])
+    ends = np.r_[starts[1:], len(tracks)] - 1
+    keep = np.array([int(t) in used for t in tracks[starts]], dtype=bool)
+    travel = values[ends[keep]] - values[starts[keep]]
+    total = float(np.abs(travel).sum())
+    if total <= 0:
+        return "unknown"
+    balance = float(travel.sum()) / total
+    if balance >= 0.7:
+        return "ccw"
+    if balance <= -0.7:
+        return "cw"
+    return "unknown"
+
+
+def sample_rates(
+    offsets: pd.DataFrame, features: pd.DataFrame, method: str, rejection: RejectionConfig
+) -> pd.DataFrame:
+    """Per-sample derivatives, rates and verdicts for offsets already judged per track."""
+    if method == "paper":
+        return judge_paper(rates.paper_samples(offsets))[0]
+    rate = dict(zip(features["track"].astype(int), features["omega_rad_s"], strict=True))
+    return flag_samples(rates.fit_samples(offsets, rate), features, rejection)
+
+
+def _sorted_by_track_and_time(offsets: pd.DataFrame) -> bool:
+    track_step = np.diff(offsets["track"].to_numpy())
+    time_step = np.diff(offsets["time_s"].to_numpy())
+    return bool(((track_step > 0) | ((track_step == 0) & (time_step > 0))).all())
+
+
+def rates_from_offsets(
+    offsets: pd.DataFrame, method: str, rejection: RejectionConfig, camera: rates.Camera | None = None
+) -> RateResult:
+    """Per-track rates and verdicts, and the combined rate.
+
+    ``offsets`` has columns ``track, frame, time_s, offset_px``, one row per sample; ``camera``
+    (fit method only) switches from orthographic to pinhole projection.
+    """
+    if not _sorted_by_track_and_time(offsets):
+        offsets = offsets.sort_values(["track", "time_s"], kind="stable").reset_index(drop=True)
+    if method == "paper":
+        _, features = judge_paper(rates.paper_samples(offsets))
+        combined = combine_plain(features.loc[features["inlier"], "omega_rad_s"].to_numpy())
+    else:
+        features = judge_fits(offsets, rates.fit_tracks(offsets, rejection.min_samples, camera), rejection)
+        release_free_memory()  # the per-track fits' padded batches are gone
+        used = features[features["inlier"]]
+        combined = combine(used["omega_rad_s"].to_numpy(), used["omega_se_rad_s"].to_numpy())
+        combined = _joint(offsets, used, combined, rejection, camera)
+    return RateResult(offsets, features, combined, _direction(offsets, features))
+
+
+def _joint(
+    offsets: pd.DataFrame, used: pd.DataFrame, pooled: Combined, rejection: RejectionConfig, camera: rates.Camera | None
+) -> Combined:
+    """The joint fit of the inlier tracks (see :mod:`rotrate_cli.joint`), started from the
+    pooled per-track rates; the pooled result stands where the joint fit finds no minimum, and
+    for fewer than :data:`JOINT_MIN_TRACKS` tracks."""
+    if len(used) < JOINT_MIN_TRACKS or not math.isfinite(pooled.omega_rad_s):
+        return pooled
+    # Each track's noise from its own residuals, moderated towards the tracks' typical noise
+    # (a few degrees of freedom say little on their own; the tracker is the same for all).
+    samples = used["samples"].to_numpy(dtype=float)
+    dof = np.maximum(samples - 3, 1)
+    variance = used["rms_residual"].to_numpy() ** 2 * samples / dof
+    typical = float(np.median(variance))
+    noise_px = np.maximum(np.sqrt((dof * variance + PRIOR_DOF * typical) / (dof + PRIOR_DOF)),
+                          max(rejection.residual_floor, 1e-9))
+    senses = used["sense"].to_numpy(dtype=float)
+    sense = float(np.sign(np.nansum(senses))) if np.isfinite(senses).any() else 1.0
+    spread = (pooled.omega_high_rad_s - pooled.omega_low_rad_s) / pooled.omega_rad_s
+    joint = joint_fit(offsets, dict(zip(used["track"], noise_px, strict=True)),
+                      pooled.omega_rad_s, span=float(np.clip(2 * spread, 0.02, 0.5)) if math.isfinite(spread) else 0.2,
+                      camera=camera, sense=sense or 1.0)
+    if not math.isfinite(joint.omega_rad_s):
+        return pooled
+    # The jackknife sees scatter between tracks but not a bias they share (tracking drift,
+    # projection error); where the two weightings disagree, that disagreement is such a bias,
+    # so the interval spans both estimators' intervals.
+    low = np.nanmin([joint.omega_low_rad_s, pooled.omega_low_rad_s, pooled.omega_rad_s])
+    high = np.nanmax([joint.omega_high_rad_s, pooled.omega_high_rad_s, pooled.omega_rad_s])
+    return Combined(joint.omega_rad_s, float(low), float(high), joint.tracks_used)
+
+
+def no_result_message(features: pd.DataFrame) -> str:
+    if features.empty:
+        return "no point could be tracked; check that the object moves and has texture, or pass --roi"
+    counts = Counter(features["reason"])
+    detail = ", ".join(f"{n} {why}" for why, n in counts.most_common())
+    return (f"no track gave a trustworthy rate ({detail}); "
+            "try a longer clip, --roi around the object, or check --fixation")
+
+
+def half_rates(result: RateResult, config: AnalysisConfig,
+            camera: rates.Camera | None) -> tuple[Combined, Combined, float, float] | None:
+    """The rates of the clip's first and second halves (same tracks, same rules) and the middle
+    time of each; None where a half gives no rate."""
+    if config.method != "fit" or result.combined.tracks_used < JOINT_MIN_TRACKS:
+        return None
+    times = result.offsets["time_s"].to_numpy()
+    first, last = float(times.min()), float(times.max())
+    middle = 0.5 * (first + last)
+    halves = []
+    for part in (times <= middle, times > middle):
+        try:
+            halves.append(rates_from_offsets(result.offsets[part], config.method, config.rejection, camera).combined)
+        except (ValueError, IndexError):
+            return None
+    if not all(h.tracks_used > 0 and math.isfinite(h.omega_rad_s) for h in halves):
+        return None
+    return halves[0], halves[1], 0.5 * (first + middle), 0.5 * (middle + last)
+
+
+def changes(whole: Combined, early: Combined, late: Combined, *_: float) -> bool:
+    """True when the halves' rates lie outside each other's intervals and more than
+    :data:`CHANGE_FRACTION` of the whole's rate apart."""
+    separate = late.omega_low_rad_s > early.omega_high_rad_s or early.omega_low_rad_s > late.omega_high_rad_s
+    return separate and abs(late.omega_rad_s - early.omega_rad_s) > CHANGE_FRACTION * whole.omega_rad_s
+
+
+def rate_change(result: RateResult, config: AnalysisConfig, camera: rates.Camera | None) -> str | None:
+    """A line saying the rate changes over the clip (see :func:`changes`); None otherwise."""
+    halves = half_rates(result, config, camera)
+    if halves is None or not changes(result.combined, *halves):
+        return None
+    early, late = halves[0], halves[1]
+    return (f"the rate changes over the clip: {early.omega_rad_s:.4g} rad/s in its first half, {late.omega_rad_s:.4g} "
+            "in its second; the result is an average: see omega(t) with --window SECONDS")
