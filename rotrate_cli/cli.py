@@ -48,9 +48,9 @@ from rotrate_cli.batch import (
 )
 from rotrate_cli.clock import read_times
 from rotrate_cli.decode import FrameSource
-from rotrate_cli.errors import InputError, OutputError, RotrateError
+from rotrate_cli.errors import InputError, RotrateError
 from rotrate_cli.focal import parse_fov
-from rotrate_cli.outputs import check_output_path, write_text
+from rotrate_cli.outputs import check_output_path, make_folder, output_format, write_text
 from rotrate_cli.overlay import draw_axis, draw_grid, frame_at, write_image, write_overlay
 from rotrate_cli.plots import write_plot
 from rotrate_cli.report import (
@@ -77,15 +77,39 @@ app = typer.Typer(
 )
 T = TypeVar("T")
 
-FormatOption = Annotated[str, typer.Option("--format", "-f", help="table, csv (Table I layout) or json.")]
-OutputOption = Annotated[Path | None, typer.Option("--output", "-o", help="Write the report to this file.")]
+
+def _print_version(value: bool) -> None:
+    if value:
+        from rotrate_cli import __version__
+
+        sys.stdout.write(f"rotrate {__version__}\n")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def _options(
+    version: Annotated[bool, typer.Option("--version", help="Show the version and exit.", is_eager=True,
+                                          callback=_print_version)] = False,
+) -> None:
+    """Measure how fast a rigid object spins (rad/s) from a video with a static camera."""
+
+FormatOption = Annotated[str | None, typer.Option("--format", "-f", metavar="FORMAT",
+                                                  help="table, csv (Table I layout) or json; default: from "
+                                                       "the --output file's extension (.json, .csv), else table.")]
+OutputOption = Annotated[Path | None, typer.Option("--output", "-o", metavar="PATH",
+                                                   help="Write the report to this file.")]
 ForceOption = Annotated[bool, typer.Option("--force", help="Replace an existing --output file.")]
-MethodOption = Annotated[str, typer.Option("--method", help="fit (ours: sinusoid fit per track) or paper "
+MethodOption = Annotated[str, typer.Option("--method", metavar="fit|paper",
+                                           help="fit (ours: sinusoid fit per track) or paper "
                                                             "(the reference paper's backward differences).")]
-EveryOption = Annotated[int, typer.Option("--every", help="Use every N-th frame's positions, as the paper did.")]
+EveryOption = Annotated[int | None, typer.Option("--every", metavar="N",
+                                                 help="Use every N-th frame's positions, as the paper did; "
+                                                      "default: 1, and with --method paper the paper's "
+                                                      "spacing (about a sixth of a radian).")]
 DebugOption = Annotated[bool, typer.Option("--debug", help="Show the traceback of an error.")]
 QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
-SchedulerOption = Annotated[str | None, typer.Option("--scheduler", help="Run the batch on this Dask cluster "
+SchedulerOption = Annotated[str | None, typer.Option("--scheduler", metavar="ADDRESS",
+                                                     help="Run the batch on this Dask cluster "
                                                                          "(tcp://HOST:8786; needs rotrate\\[dask]).")]
 
 
@@ -177,73 +201,93 @@ def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | N
 def analyze_command(
     videos: Annotated[list[str], typer.Argument(help="Video file(s), image folder, printf pattern like "
                                                       "frames/img.%03d.png, folders of videos, or globs.")],
-    fixation: Annotated[str | None, typer.Option("--fixation", help="X,Y pixel of a point on the rotation axis, or "
+    fixation: Annotated[str | None, typer.Option("--fixation", metavar="X,Y|auto",
+                                                 help="X,Y pixel of a point on the rotation axis, or "
                                                                     "'auto' to find the axis from the motion "
                                                                     "(required, except with --segment).")] = None,
     fps: Annotated[
-        float | None, typer.Option("--fps", help="Frame rate; overrides the file's, required for images.")
+        float | None, typer.Option("--fps", metavar="FPS",
+                                   help="Frame rate; overrides the file's, required for images.")
     ] = None,
-    start: Annotated[float, typer.Option("--start", help="Start time, s.")] = 0.0,
-    end: Annotated[float | None, typer.Option("--end", help="End time, s.")] = None,
-    roi: Annotated[str | None, typer.Option("--roi", help="X,Y,W,H: seed points only in this box.")] = None,
-    every: EveryOption = 1,
+    start: Annotated[float, typer.Option("--start", metavar="SECONDS", help="Start time, s.")] = 0.0,
+    end: Annotated[float | None, typer.Option("--end", metavar="SECONDS", help="End time, s.")] = None,
+    roi: Annotated[str | None, typer.Option("--roi", metavar="X,Y,W,H",
+                                            help="X,Y,W,H: seed points only in this box.")] = None,
+    every: EveryOption = None,
     method: MethodOption = "fit",
-    fov: Annotated[str | None, typer.Option("--fov", help="Horizontal field of view, degrees: corrects "
+    fov: Annotated[str | None, typer.Option("--fov", metavar="DEG|auto|ortho",
+                                            help="Horizontal field of view, degrees: corrects "
                                                           "for perspective (pinhole camera); auto: found "
                                                           "from the tracks (with the camera's elevation).")
                    ] = None,
-    focal_px: Annotated[float | None, typer.Option("--focal-px", help="Focal length in pixels, instead of "
+    focal_px: Annotated[float | None, typer.Option("--focal-px", metavar="PX",
+                                                   help="Focal length in pixels, instead of "
                                                                       "--fov.")] = None,
-    axis_angle: Annotated[float | None, typer.Option("--axis-angle", help="Axis angle in the image, degrees (0 "
+    axis_angle: Annotated[float | None, typer.Option("--axis-angle", metavar="DEG",
+                                                     help="Axis angle in the image, degrees (0 "
                                                                         "vertical, + top end right); default: "
                                                                         "from the motion.")] = None,
-    angle_from: Annotated[str, typer.Option("--angle-from", help="How to find the axis angle: motion (default) "
+    angle_from: Annotated[str, typer.Option("--angle-from", metavar="motion|paths",
+                                            help="How to find the axis angle: motion (default) "
                                                                  "or paths (each track's elliptical path; "
                                                                  "right when the camera looks down on the "
                                                                  "object; slower).")] = "motion",
-    elevation: Annotated[float | None, typer.Option("--elevation", help="How far the camera looks down on the "
+    elevation: Annotated[float | None, typer.Option("--elevation", metavar="DEG",
+                                                    help="How far the camera looks down on the "
                                                                        "object, degrees, for the pinhole model "
                                                                        "(--fov); found with --angle-from paths.")
                          ] = None,
-    window: Annotated[float | None, typer.Option("--window", help="Also measure omega(t) over a sliding "
+    window: Annotated[float | None, typer.Option("--window", metavar="SECONDS",
+                                                 help="Also measure omega(t) over a sliding "
                                                                   "window of this many seconds.")] = None,
-    series_csv_path: Annotated[Path | None, typer.Option("--series-csv", help="Write omega(t) (needs --window) "
+    series_csv_path: Annotated[Path | None, typer.Option("--series-csv", metavar="PATH",
+                                                         help="Write omega(t) (needs --window) "
                                                                                "to this CSV file.")] = None,
-    track: Annotated[list[str] | None, typer.Option("--track", help="X,Y of a point to follow (repeat for "
+    track: Annotated[list[str] | None, typer.Option("--track", metavar="X,Y",
+                                                    help="X,Y of a point to follow (repeat for "
                                                                      "more): features 1..n, as the paper's "
                                                                      "hand-tracked ones.")] = None,
-    tracker_kind: Annotated[str | None, typer.Option("--tracker", help="klt or csrt (default: klt; csrt with "
+    tracker_kind: Annotated[str | None, typer.Option("--tracker", metavar="klt|csrt",
+                                                     help="klt or csrt (default: klt; csrt with "
                                                                        "--track). Automatic csrt follows 30 "
                                                                        "corners, about 5x slower; videos only, "
                                                                        "not stills far apart.")] = None,
-    scale: Annotated[float | None, typer.Option("--scale", help="Physical units per pixel: positions and "
+    scale: Annotated[float | None, typer.Option("--scale", metavar="UNITS_PER_PX",
+                                                help="Physical units per pixel: positions and "
                                                                 "derivatives in the reports in those units "
                                                                 "(omega is unchanged).")] = None,
-    unit: Annotated[str | None, typer.Option("--unit", help="The name of --scale's unit (e.g. in, mm).")] = None,
-    plot: Annotated[Path | None, typer.Option("--plot", help="Also write a picture: tracks against the fit, "
+    unit: Annotated[str | None, typer.Option("--unit", metavar="NAME",
+                                             help="The name of --scale's unit (e.g. in, mm).")] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", metavar="PATH",
+                                              help="Also write a picture: tracks against the fit, "
                                                               "each feature's rate, omega over time (.png; "
                                                               "needs rotrate\\[plot]).")] = None,
-    overlay: Annotated[Path | None, typer.Option("--overlay", help="Also write a video with the axis, the "
+    overlay: Annotated[Path | None, typer.Option("--overlay", metavar="PATH",
+                                                 help="Also write a video with the axis, the "
                                                                     "tracks and the running omega drawn on it "
                                                                     "(.mp4).")] = None,
     segment: Annotated[bool, typer.Option("--segment", help="Several objects: group the points into rigid "
                                                             "bodies by rate and axis and report each.")] = False,
-    blur: Annotated[float | None, typer.Option("--blur", help="Blur (sigma, px) before tracking; default 1 "
+    blur: Annotated[float | None, typer.Option("--blur", metavar="SIGMA_PX",
+                                               help="Blur (sigma, px) before tracking; default 1 "
                                                               "for videos, 0 for image sequences.")] = None,
-    expect: Annotated[float | None, typer.Option("--expect", help="Expected omega, rad/s: exit 1 when the "
+    expect: Annotated[float | None, typer.Option("--expect", metavar="RAD_S",
+                                                 help="Expected omega, rad/s: exit 1 when the "
                                                                   "result is outside --tolerance of it.")] = None,
-    tolerance: Annotated[float | None, typer.Option("--tolerance", help="Tolerance of --expect, percent.")] = None,
+    tolerance: Annotated[float | None, typer.Option("--tolerance", metavar="PCT",
+                                                    help="Tolerance of --expect, percent.")] = None,
     strict: Annotated[bool, typer.Option("--strict", help="Exit 1 when the evidence is weak (quality: weak).")
                       ] = False,
     times: Annotated[Path | None, typer.Option("--times", metavar="PATH",
                                                help="A file of frame times, seconds, one per line (one per frame), "
                                                     "instead of --fps or the photographs' EXIF times.")] = None,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Inputs analysed at once (processes).")] = 1,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", metavar="N", help="Inputs analysed at once (processes).")] = 1,
     scheduler: SchedulerOption = None,
-    output_dir: Annotated[Path | None, typer.Option("--output-dir", help="With several inputs: write each "
+    output_dir: Annotated[Path | None, typer.Option("--output-dir", metavar="PATH",
+                                                    help="With several inputs: write each "
                                                                          "one's report here as STEM.json "
                                                                          "(STEM.csv with --format csv).")] = None,
-    fmt: FormatOption = "table",
+    fmt: FormatOption = None,
     output: OutputOption = None,
     force: ForceOption = False,
     quiet: QuietOption = False,
@@ -256,7 +300,8 @@ def analyze_command(
     """
 
     def job() -> int:
-        _check_format(fmt)
+        form = output_format(output, fmt)
+        _check_format(form)
         _check_method(method)
         if fixation is None and not segment:
             raise InputError("give --fixation X,Y (a pixel on the rotation axis) or --fixation auto")
@@ -299,7 +344,7 @@ def analyze_command(
         if len(videos) > 1 or sources != videos:
             if series_csv_path is not None or overlay is not None or plot is not None:
                 raise InputError("--series-csv, --overlay and --plot take one input; with several, use --output-dir")
-            return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, fmt, output, force,
+            return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, form, output, force,
                           strict)
         if scheduler is not None:
             raise InputError("--scheduler is for several inputs (a batch); with one, drop it")
@@ -314,7 +359,7 @@ def analyze_command(
             _write_overlay(sources[0], fps, start, end, analysis, overlay, force)
         if plot is not None:
             write_plot(analysis if units is None else with_units(analysis, *units), plot, force)
-        _emit(analysis if units is None else with_units(analysis, *units), fmt, output, force)
+        _emit(analysis if units is None else with_units(analysis, *units), form, output, force)
         for warning in analysis.warnings:
             Console(stderr=True, soft_wrap=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
         if expect is not None and tolerance is not None:
@@ -386,8 +431,7 @@ def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tol
     """Analyse several inputs; one summary row each; the worst input's exit code."""
     details: list[Path] = []
     if output_dir is not None:
-        if not output_dir.is_dir():
-            raise OutputError(f"--output-dir {output_dir} is not a folder; create it first")
+        make_folder(output_dir)
         details = _detail_paths(sources, output_dir, ".csv" if fmt == "csv" else ".json")
         for path in details:
             check_output_path(path, force)  # before a long run, not after
@@ -411,17 +455,20 @@ def check_command(
     manifest: Annotated[Path, typer.Argument(help="CSV: file, expected_omega, tolerance_pct, and optional "
                                                   "per-row fixation, fov, focal_px, fps, axis_angle, every, "
                                                   "method, start, end.")],
-    junit: Annotated[Path | None, typer.Option("--junit", help="Also write JUnit XML here, for CI.")] = None,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Rows analysed at once (processes).")] = 1,
+    junit: Annotated[Path | None, typer.Option("--junit", metavar="PATH",
+                                               help="Also write JUnit XML here, for CI.")] = None,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", metavar="N", help="Rows analysed at once (processes).")] = 1,
     scheduler: SchedulerOption = None,
-    fmt: FormatOption = "table",
-    force: ForceOption = False,
+    fmt: Annotated[str | None, typer.Option("--format", "-f", metavar="FORMAT",
+                                            help="table (pass/fail), csv or json (one row per file).")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Replace an existing --junit file.")] = False,
     debug: DebugOption = False,
 ) -> None:
     """Run a regression manifest: pass when every file's omega is within its tolerance."""
 
     def job() -> int:
-        _check_format(fmt)
+        form = fmt or "table"
+        _check_format(form)
         if junit is not None:
             check_output_path(junit, force)
         jobs_list = read_manifest(manifest, AnalysisConfig(fixation_px=None))
@@ -429,10 +476,10 @@ def check_command(
         expected = [(j.expected_rad_s or math.nan, j.tolerance_pct or 0.0) for j in jobs_list]
         if junit is not None:
             write_text(junit, junit_xml(outcomes, expected, manifest.stem), force)
-        if fmt == "table":
+        if form == "table":
             render_check(outcomes, expected, _wide_console())
         else:
-            sys.stdout.write(summary_text(outcomes, fmt))
+            sys.stdout.write(summary_text(outcomes, form))
         failed = sum(o.status != "ok" for o in outcomes)
         if failed:
             raise _fail(f"{failed} of {len(outcomes)} manifest rows failed", 1)
@@ -444,11 +491,13 @@ def check_command(
 @app.command("frame")
 def frame_command(
     video: Annotated[str, typer.Argument(help="Video file, image folder, or printf pattern.")],
-    output: Annotated[Path, typer.Option("--output", "-o", help="The still to write (.png).")],
-    at: Annotated[float, typer.Option("--at", help="Time of the frame, s.")] = 0.0,
-    fps: Annotated[float | None, typer.Option("--fps", help="Frame rate; required for image sequences.")] = None,
+    output: Annotated[Path, typer.Option("--output", "-o", metavar="PATH", help="The still to write (.png).")],
+    at: Annotated[float, typer.Option("--at", metavar="SECONDS", help="Time of the frame, s.")] = 0.0,
+    fps: Annotated[float | None, typer.Option("--fps", metavar="FPS",
+                                              help="Frame rate; required for image sequences.")] = None,
     grid: Annotated[int, typer.Option("--grid", help="Grid spacing, px.")] = 50,
-    angle_from: Annotated[str, typer.Option("--angle-from", help="How to find the axis angle: motion (default) "
+    angle_from: Annotated[str, typer.Option("--angle-from", metavar="motion|paths",
+                                            help="How to find the axis angle: motion (default) "
                                                                  "or paths (as for analyze).")] = "motion",
     force: ForceOption = False,
     debug: DebugOption = False,
@@ -487,12 +536,15 @@ def frame_command(
 @app.command("omega")
 def omega_command(
     tracks: Annotated[Path, typer.Argument(help="Tracks CSV: track (or feature), frame, optional time_s, position.")],
-    fixation: Annotated[float, typer.Option("--fixation", help="Axis position, in the position column's units.")],
-    position_column: Annotated[str, typer.Option("--position-column", help="The horizontal position column.")] = "x",
-    fps: Annotated[float | None, typer.Option("--fps", help="Frame rate: times are frame / fps (else time_s).")] = None,
-    every: EveryOption = 1,
+    fixation: Annotated[float, typer.Option("--fixation", metavar="X,Y|auto",
+                                            help="Axis position, in the position column's units.")],
+    position_column: Annotated[str, typer.Option("--position-column", metavar="NAME",
+                                                 help="The horizontal position column.")] = "x",
+    fps: Annotated[float | None, typer.Option("--fps", metavar="FPS",
+                                              help="Frame rate: times are frame / fps (else time_s).")] = None,
+    every: EveryOption = None,
     method: MethodOption = "fit",
-    fmt: FormatOption = "table",
+    fmt: FormatOption = None,
     output: OutputOption = None,
     force: ForceOption = False,
     debug: DebugOption = False,
@@ -500,13 +552,14 @@ def omega_command(
     """Rotation rate from tracked positions in a file (for example the paper's Table I)."""
 
     def job() -> int:
-        _check_format(fmt)
+        form = output_format(output, fmt)
+        _check_format(form)
         _check_method(method)
         table = read_tracks(tracks, position_column)
         unit = position_column.rsplit("_", 1)[1] if "_" in position_column else "units"
         analysis = analyze_tracks(table, fixation, source=str(tracks), fps=fps, every=every, method=method,
                                   position_unit=unit)
-        _emit(analysis, fmt, output, force)
+        _emit(analysis, form, output, force)
         return 0
 
     _run(debug, job)
@@ -515,25 +568,29 @@ def omega_command(
 @app.command("synth")
 def synth_command(
     output: Annotated[Path, typer.Argument(help="Video to write (.mp4); the truth goes beside it as .json.")],
-    shape: Annotated[str, typer.Option("--shape", help=f"One of {', '.join(SHAPES)}.")] = "box",
+    shape: Annotated[str, typer.Option("--shape", metavar="NAME", help=f"One of {', '.join(SHAPES)}.")] = "box",
     omega: Annotated[
-        float, typer.Option("--omega", help="Rate in rad/s; negative turns clockwise seen from above.")
+        float, typer.Option("--omega", metavar="RAD_S", help="Rate in rad/s; negative turns clockwise seen from above.")
     ] = 0.5,
-    fps: Annotated[float, typer.Option("--fps", help="Frames per second.")] = 30.0,
-    duration: Annotated[float, typer.Option("--duration", help="Length, s.")] = 5.0,
-    size: Annotated[str, typer.Option("--size", help="WIDTHxHEIGHT in pixels.")] = "640x360",
-    projection: Annotated[str, typer.Option("--projection", help=f"One of {', '.join(PROJECTIONS)}.")] = "orthographic",
-    fov: Annotated[float, typer.Option("--fov", help="Horizontal field of view, degrees (perspective).")] = 25.0,
-    axis_offset: Annotated[float, typer.Option("--axis-offset", help="Axis offset from the centre, px.")] = 0.0,
-    noise: Annotated[float, typer.Option("--noise", help="Sensor noise, grey levels.")] = 0.0,
+    fps: Annotated[float, typer.Option("--fps", metavar="FPS", help="Frames per second.")] = 30.0,
+    duration: Annotated[float, typer.Option("--duration", metavar="SECONDS", help="Length, s.")] = 5.0,
+    size: Annotated[str, typer.Option("--size", metavar="WxH", help="WIDTHxHEIGHT in pixels.")] = "640x360",
+    projection: Annotated[str, typer.Option("--projection", metavar="NAME",
+                                            help=f"One of {', '.join(PROJECTIONS)}.")] = "orthographic",
+    fov: Annotated[float, typer.Option("--fov", metavar="DEG|auto|ortho",
+                                       help="Horizontal field of view, degrees (perspective).")] = 25.0,
+    axis_offset: Annotated[float, typer.Option("--axis-offset", metavar="PX",
+                                               help="Axis offset from the centre, px.")] = 0.0,
+    noise: Annotated[float, typer.Option("--noise", metavar="LEVELS", help="Sensor noise, grey levels.")] = 0.0,
     jpeg_quality: Annotated[
-        int | None, typer.Option("--jpeg-quality", help="Pass each frame through JPEG at this quality (1-100).")
+        int | None, typer.Option("--jpeg-quality", metavar="1-100",
+                                 help="Pass each frame through JPEG at this quality (1-100).")
     ] = None,
-    roll: Annotated[float, typer.Option("--roll", help="Camera roll, degrees (the axis's top end leans "
+    roll: Annotated[float, typer.Option("--roll", metavar="DEG", help="Camera roll, degrees (the axis's top end leans "
                                                        "right; 90: a horizontal axis).")] = 0.0,
-    elevation: Annotated[float, typer.Option("--elevation", help="Camera elevation, degrees above the "
+    elevation: Annotated[float, typer.Option("--elevation", metavar="DEG", help="Camera elevation, degrees above the "
                                                                  "object's mid-height (the top shows).")] = 0.0,
-    seed: Annotated[int, typer.Option("--seed", help="Seed of textures and noise.")] = 0,
+    seed: Annotated[int, typer.Option("--seed", metavar="N", help="Seed of textures and noise.")] = 0,
     force: ForceOption = False,
     debug: DebugOption = False,
 ) -> None:

@@ -37,7 +37,9 @@ class AnalysisConfig:
             ``angle_from="paths"``.
         fps: frame-rate override in frames per second (required for image sequences).
         start_s, end_s: the time span to analyse, in seconds (``end_s`` None: to the end).
-        every: use every N-th frame's positions for the rates (tracking still sees every frame).
+        every: use every N-th frame's positions for the rates (tracking still sees every frame);
+            None: 1 for the fit method, and for the paper's method the paper's spacing, about a
+            sixth of a radian between samples (its 16 frames at 30 fps), from a first rate.
         method: ``fit`` (ours) or ``paper`` (the reference paper's backward differences).
         fov_deg: the camera's horizontal field of view, degrees, for the pinhole model; None
             (and no ``focal_px``) treats the view as orthographic, as the paper does.
@@ -69,7 +71,7 @@ class AnalysisConfig:
     elevation_deg: float | None = None
     start_s: float = 0.0
     end_s: float | None = None
-    every: int = 1
+    every: int | None = 1
     method: str = "fit"
     fov_deg: float | None = None
     focal_px: float | None = None
@@ -87,7 +89,7 @@ class AnalysisConfig:
 def check_config(config: AnalysisConfig) -> None:
     if config.method not in rates.METHODS:
         raise InputError(f"unknown method {config.method!r}; use one of {', '.join(rates.METHODS)}")
-    if config.every < 1:
+    if config.every is not None and config.every < 1:
         raise InputError("--every must be a whole number of frames, 1 or more")
     if config.start_s < 0 or not math.isfinite(config.start_s):
         raise InputError("--start must be 0 seconds or later")

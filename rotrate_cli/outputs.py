@@ -38,12 +38,49 @@ def replacing(path: Path, force: bool, suffix: str = ".partial") -> Iterator[Pat
     parent = path.parent if str(path.parent) else Path(".")
     handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=parent)
     os.close(handle)
+    # mkstemp makes the file 0600: give it the mode any other tool would (0666 less the umask)
+    os.chmod(temporary, 0o666 & ~_umask())
     try:
         yield Path(temporary)
         os.replace(temporary, path)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
+
+
+def _umask() -> int:
+    """The process's umask (read by setting it and setting it back: there is no getter)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def output_format(path: Path | None, given: str | None, default: str = "table") -> str:
+    """The report format: ``given`` (``--format``) or, when not given, the output file's extension
+    (``.json``, ``.csv``), else ``default``.
+
+    Raises:
+        OutputError: the extension contradicts the format given.
+    """
+    by_name = {".json": "json", ".csv": "csv"}.get(path.suffix.lower()) if path is not None else None
+    if given is None:
+        return by_name or default
+    if by_name is not None and by_name != given:
+        raise OutputError(f"--format {given} contradicts the file name {path} ({by_name}); "
+                          "drop --format, or name the file to match")
+    return given
+
+
+def make_folder(folder: Path) -> None:
+    """Create ``folder`` and its parents (as ``mkdir -p``).
+
+    Raises:
+        OutputError: it cannot be created (a file in the way, no permission).
+    """
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"cannot create the folder {folder}: {exc.strerror or exc}") from None
 
 
 def write_text(path: Path, text: str, force: bool) -> None:

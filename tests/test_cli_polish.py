@@ -1,0 +1,86 @@
+"""Command-line polish: a window longer than the clip, the format from the output's name, file
+modes, output folders made, honest help and --version, the paper's method at its own spacing."""
+
+from __future__ import annotations
+
+import json
+import os
+import stat
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from rotrate_cli.cli import app
+from tests.conftest import SAMPLES
+
+runner = CliRunner()
+CLIP = str(SAMPLES / "box_ortho.mp4")
+FIX = ["--fixation", "319.5,179.5", "-q"]
+
+
+def _one_error_line(result, code: int, *words: str) -> None:
+    assert result.exit_code == code, result.output
+    lines = [line for line in result.stderr.splitlines() if line.startswith("rotrate: error: ")]
+    assert len(lines) == 1 and "Traceback" not in result.output
+    for word in words:
+        assert word in lines[0]
+
+
+def test_a_window_longer_than_the_clip_is_one_line_exit_2() -> None:
+    _one_error_line(runner.invoke(app, ["analyze", CLIP, *FIX, "--window", "20"]), 2, "--window", "longer")
+
+
+@pytest.mark.parametrize(("name", "check"), [
+    ("out.json", lambda text: json.loads(text)["omega"] > 0),
+    ("out.csv", lambda text: text.startswith("feature,frame,time_s")),
+    ("out.txt", lambda text: "omega" in text and "rad/s" in text),
+])
+def test_the_format_comes_from_the_output_name(tmp_path: Path, name: str, check) -> None:
+    target = tmp_path / name
+    result = runner.invoke(app, ["analyze", CLIP, *FIX, "-o", str(target)])
+    assert result.exit_code == 0, result.output
+    assert check(target.read_text())
+
+
+def test_a_format_that_contradicts_the_name_is_refused(tmp_path: Path) -> None:
+    target = tmp_path / "out.json"
+    _one_error_line(runner.invoke(app, ["analyze", CLIP, *FIX, "-f", "table", "-o", str(target)]), 2, "contradicts")
+    assert not target.exists()
+
+
+def test_output_files_honour_the_umask(tmp_path: Path) -> None:
+    previous = os.umask(0o022)
+    try:
+        target = tmp_path / "out.json"
+        assert runner.invoke(app, ["analyze", CLIP, *FIX, "-o", str(target)]).exit_code == 0
+    finally:
+        os.umask(previous)
+    assert stat.S_IMODE(target.stat().st_mode) == 0o644
+
+
+def test_output_dir_is_made_with_its_parents(tmp_path: Path) -> None:
+    folder = tmp_path / "reports" / "today"
+    result = runner.invoke(app, ["analyze", CLIP, str(SAMPLES / "cylinder_ortho.mp4"), "--fixation", "auto", "-q",
+                                 "--output-dir", str(folder)])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in folder.iterdir()) == ["box_ortho.json", "cylinder_ortho.json"]
+
+
+def test_help_says_what_each_command_has() -> None:
+    check = runner.invoke(app, ["check", "--help"]).stdout
+    assert "Table I" not in check and "--output file" not in check and "--junit file" in check
+    analyze = runner.invoke(app, ["analyze", "--help"]).stdout
+    for metavar in ("X,Y|auto", "SECONDS", "DEG", "PATH"):
+        assert metavar in analyze
+    assert "<str>" not in analyze and "<float>" not in analyze
+    version = runner.invoke(app, ["--version"])
+    assert version.exit_code == 0 and version.stdout.startswith("rotrate ")
+
+
+def test_the_papers_method_takes_the_papers_spacing() -> None:
+    """At --every 1 the paper's second differences are noise (1.463 for 0.6); by default the
+    spacing is about a sixth of a radian, as the paper's 16 frames at 30 fps."""
+    result = runner.invoke(app, ["analyze", CLIP, *FIX, "--method", "paper", "-f", "json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["omega"] == pytest.approx(0.6, rel=0.05)
