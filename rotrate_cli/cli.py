@@ -356,7 +356,8 @@ def analyze_command(
         if series_csv_path is not None:
             write_text(series_csv_path, series_csv(analysis), force)
         if overlay is not None:
-            _write_overlay(sources[0], fps, start, end, analysis, overlay, force)
+            _write_overlay(sources[0], fps, start, end, analysis, overlay, force,
+                           None if frame_times is None else np.asarray(frame_times))
         if plot is not None:
             write_plot(analysis if units is None else with_units(analysis, *units), plot, force)
         _emit(analysis if units is None else with_units(analysis, *units), form, output, force)
@@ -390,12 +391,16 @@ def _units(scale: float | None, unit: str | None) -> tuple[float, str] | None:
 
 
 def _write_overlay(source: str, fps: float | None, start: float, end: float | None, analysis: Analysis,
-                   path: Path, force: bool) -> None:
-    """The overlay video of a finished analysis (see :func:`rotrate_cli.overlay.write_overlay`)."""
+                   path: Path, force: bool, times_s: np.ndarray | None = None) -> None:
+    """The overlay video of a finished analysis (see :func:`rotrate_cli.overlay.write_overlay`):
+    the running rate of the tracks, or, where the rate is the clip's repetition (a whole-clip
+    measurement), the reported rate throughout."""
     running = running_rate(analysis)
     times = running["time_s"].to_numpy()
 
     def at(time_s: float) -> tuple[float, float, float]:
+        if analysis.rate_from == "repetition":
+            return analysis.omega_rad_s, analysis.omega_low_rad_s, analysis.omega_high_rad_s
         index = int(np.searchsorted(times, time_s + 1e-9, side="right")) - 1
         if index < 0:
             return math.nan, math.nan, math.nan
@@ -405,7 +410,7 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
     features = analysis.features
     inliers = set(features.loc[features["inlier"], "track"].astype(int))
     assert analysis.tracks is not None  # noqa: S101 - asked for with keep_tracks
-    write_overlay(FrameSource(source, fps=fps), path, analysis.tracks, inliers, analysis.fixation_px,
+    write_overlay(FrameSource(source, fps=fps, times_s=times_s), path, analysis.tracks, inliers, analysis.fixation_px,
                   analysis.axis_angle_deg, at, start, end, force)
 
 
