@@ -266,13 +266,13 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
                "axis_angle_found": config.axis_angle_deg is None and not assumed_vertical,
                "axis_angle_from": angle_source, "elevation_deg": elevation_found, "clock": info.clock,
                "camera_from": camera_from}
+    if config.every is None:
+        config = replace(config, every=_sample_spacing(everything, angle, config.method))
     if config.segment:
         return _segmented(everything, angle, config, size_px, warnings, context)
     kept = None
     if config.keep_tracks:  # for pictures of the measurement (an overlay): numbered as the features
         kept = everything[["frame", "time_s", "track", "x_px", "y_px"]].assign(track=everything["track"] + 1)
-    if config.every is None:
-        config = replace(config, every=_sample_spacing(everything, angle, config.method))
     period = _repetition(thumbnails, config, info.clock_resolution_s)
     thumbnails.clear()
     try:
