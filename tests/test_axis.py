@@ -175,6 +175,7 @@ def test_dinosaur_with_fixation_auto_within_two_percent() -> None:
     assert result.direction == "cw"
 
 
+@pytest.mark.slow  # renders a clip (about 10 s): make test-slow keeps make test under 4 minutes
 def test_camera_elevation_seen_from_above(tmp_path: Path) -> None:
     # a camera looking down 25 degrees: the top shows and points move on ellipses; the horizontal
     # offset is still a sinusoid, so rate, axis and direction hold (the renderer's elevation)
@@ -242,6 +243,7 @@ def test_path_shape_needs_a_rate_and_enough_turning_tracks() -> None:
     assert axes.path_shape(tracks[tracks["track"] < 5], 0.5) is None
 
 
+@pytest.mark.slow  # renders a clip (about 10 s): make test-slow keeps make test under 4 minutes
 def test_angle_from_paths_on_a_cylinder_seen_from_above(tmp_path: Path) -> None:
     # measured on the accuracy suite's cylinder seen from 30 degrees above: the motion's angle
     # 10.3 degrees (omega -1.0%, interval +-7%), the paths' 2.0 (+0.6%, +-0.5%)
@@ -271,6 +273,7 @@ def test_angle_from_bad_combinations_are_one_line_errors(options: list[str], mes
     assert message in result.stderr and len(result.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.slow  # renders a clip (about 10 s): make test-slow keeps make test under 4 minutes
 def test_pinhole_camera_seen_from_above(tmp_path: Path) -> None:
     # a 25-degree lens looking down 30 degrees: a point's depth changes by its radial position
     # times cos(30), which the level pinhole model overstates (measured -1.19%); given the
