@@ -186,6 +186,10 @@ class FrameSource:
         if fps is None:
             if not (MIN_FPS <= container_fps <= MAX_FPS and math.isfinite(container_fps)):
                 raise InputError(f"could not read the frame rate of {self._source}; pass --fps")
+        elif MIN_FPS <= container_fps <= MAX_FPS and abs(fps / container_fps - 1.0) > 0.01:
+            # a slow-motion clip is a fair reason; a variable-rate phone video is not (+47% seen)
+            self.warnings.append(f"--fps {fps:g} differs from the stream's own rate ({container_fps:.4g} frames/s); "
+                                 "the times used are index / --fps")
         height, width = first.shape[:2]
         self._first_grey = _grey(first)[::4, ::4]
         if self._times is not None and count > 0 and len(self._times) != count:

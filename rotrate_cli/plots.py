@@ -124,6 +124,11 @@ def _time_panel(axes: Axes, analysis: Analysis) -> None:
         series, title = analysis.series, "omega(t) over the sliding window, with its 95% band"
     else:
         series, title = running_rate(analysis), "omega from the start up to each time, with its 95% band"
+    if analysis.rate_from == "repetition":
+        # the reported rate is a whole-clip measurement: the tracks' own rates are shown beside it
+        title = ("the tracks' " + title[0].lower() + title[1:] + "; dashed: the reported rate, from the clip's "
+                 "repetition")
+        axes.axhspan(analysis.omega_low_rad_s, analysis.omega_high_rad_s, color="C2", alpha=0.2)
     finite = series[np.isfinite(series["omega_rad_s"])]
     if len(finite):
         axes.fill_between(finite["time_s"], finite["omega_low_rad_s"], finite["omega_high_rad_s"], color="C0",

@@ -110,3 +110,11 @@ def test_times_on_a_video_must_match_its_frames(tmp_path: Path) -> None:
     result = runner.invoke(app, ["analyze", str(clip), "--fixation", "auto", "--times", str(path), "-q"])
     assert result.exit_code == 2, result.output
     assert "--times gives 10 times" in result.stderr
+
+
+def test_fps_that_contradicts_a_videos_own_rate_is_warned_of() -> None:
+    clip = Path(__file__).resolve().parents[1] / "sample_videos" / "box_ortho.mp4"  # 30 fps
+    assert any("--fps 25 differs from the stream's own rate (30" in w for w in FrameSource(clip, fps=25.0).warnings)
+    assert not FrameSource(clip, fps=30.0).warnings
+    result = runner.invoke(app, ["analyze", str(clip), "--fixation", "319.5,179.5", "--fps", "25", "-q", "-f", "json"])
+    assert result.exit_code == 0 and "differs from the stream's own rate" in result.stderr
