@@ -46,8 +46,6 @@ MOST_SYMMETRY = 6
 #: Halves of the clip whose repeats differ by more than this fraction show a changing rate.
 CHANGE_FRACTION = 0.01
 
-RATE_SOURCES = ("tracks", "repetition")
-QUALITIES = ("good", "weak")
 
 
 @dataclass(frozen=True)
