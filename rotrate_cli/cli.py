@@ -88,7 +88,7 @@ def _print_version(value: bool) -> None:
 
 @app.callback()
 def _options(
-    version: Annotated[bool, typer.Option("--version", help="Show the version and exit.", is_eager=True,
+    version: Annotated[bool, typer.Option("--version", metavar="", help="Show the version and exit.", is_eager=True,
                                           callback=_print_version)] = False,
 ) -> None:
     """Measure how fast a rigid object spins (rad/s) from a video with a static camera."""
@@ -98,7 +98,7 @@ FormatOption = Annotated[str | None, typer.Option("--format", "-f", metavar="FOR
                                                        "the --output file's extension (.json, .csv), else table.")]
 OutputOption = Annotated[Path | None, typer.Option("--output", "-o", metavar="PATH",
                                                    help="Write the report to this file.")]
-ForceOption = Annotated[bool, typer.Option("--force", help="Replace an existing --output file.")]
+ForceOption = Annotated[bool, typer.Option("--force", metavar="", help="Replace an existing --output file.")]
 MethodOption = Annotated[str, typer.Option("--method", metavar="fit|paper",
                                            help="fit (ours: sinusoid fit per track) or paper "
                                                             "(the reference paper's backward differences).")]
@@ -106,8 +106,8 @@ EveryOption = Annotated[int | None, typer.Option("--every", metavar="N",
                                                  help="Use every N-th frame's positions, as the paper did; "
                                                       "default: 1, and with --method paper the paper's "
                                                       "spacing (about a sixth of a radian).")]
-DebugOption = Annotated[bool, typer.Option("--debug", help="Show the traceback of an error.")]
-QuietOption = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")]
+DebugOption = Annotated[bool, typer.Option("--debug", metavar="", help="Show the traceback of an error.")]
+QuietOption = Annotated[bool, typer.Option("--quiet", "-q", metavar="", help="No progress bar.")]
 SchedulerOption = Annotated[str | None, typer.Option("--scheduler", metavar="ADDRESS",
                                                      help="Run the batch on this Dask cluster "
                                                                          "(tcp://HOST:8786; needs rotrate\\[dask]).")]
@@ -266,7 +266,7 @@ def analyze_command(
                                                  help="Also write a video with the axis, the "
                                                                     "tracks and the running omega drawn on it "
                                                                     "(.mp4).")] = None,
-    segment: Annotated[bool, typer.Option("--segment", help="Several objects: group the points into rigid "
+    segment: Annotated[bool, typer.Option("--segment", metavar="", help="Several objects: group the points into rigid "
                                                             "bodies by rate and axis and report each.")] = False,
     blur: Annotated[float | None, typer.Option("--blur", metavar="SIGMA_PX",
                                                help="Blur (sigma, px) before tracking; default 1 "
@@ -276,7 +276,8 @@ def analyze_command(
                                                                   "result is outside --tolerance of it.")] = None,
     tolerance: Annotated[float | None, typer.Option("--tolerance", metavar="PCT",
                                                     help="Tolerance of --expect, percent.")] = None,
-    strict: Annotated[bool, typer.Option("--strict", help="Exit 1 when the evidence is weak (quality: weak).")
+    strict: Annotated[bool, typer.Option("--strict", metavar="",
+                                         help="Exit 1 when the evidence is weak (quality: weak).")
                       ] = False,
     times: Annotated[Path | None, typer.Option("--times", metavar="PATH",
                                                help="A file of frame times, seconds, one per line (one per frame), "
@@ -466,7 +467,7 @@ def check_command(
     scheduler: SchedulerOption = None,
     fmt: Annotated[str | None, typer.Option("--format", "-f", metavar="FORMAT",
                                             help="table (pass/fail), csv or json (one row per file).")] = None,
-    force: Annotated[bool, typer.Option("--force", help="Replace an existing --junit file.")] = False,
+    force: Annotated[bool, typer.Option("--force", metavar="", help="Replace an existing --junit file.")] = False,
     debug: DebugOption = False,
 ) -> None:
     """Run a regression manifest: pass when every file's omega is within its tolerance."""

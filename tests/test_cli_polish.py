@@ -74,6 +74,8 @@ def test_help_says_what_each_command_has() -> None:
     for metavar in ("X,Y|auto", "SECONDS", "DEG", "PATH"):
         assert metavar in analyze
     assert "<str>" not in analyze and "<float>" not in analyze
+    flags = [line for line in analyze.splitlines() if "--force" in line or "--strict" in line]
+    assert flags and not any("<bool>" in line for line in flags)
     version = runner.invoke(app, ["--version"])
     assert version.exit_code == 0 and version.stdout.startswith("rotrate ")
 
