@@ -175,11 +175,7 @@ def fixation_doubt(result: RateResult, camera: rates.Camera | None, fixation: tu
     inlier = features["inlier"].to_numpy(dtype=bool)
     if config.method != "fit" or config.points_px or inlier.sum() < JOINT_MIN_TRACKS:
         return None
-    offsets = result.offsets[result.offsets["track"].isin(features.loc[inlier, "track"])]
-    omega = result.combined.omega_rad_s
-    if camera is not None:
-        senses = features.loc[inlier, "sense"].to_numpy(dtype=float)
-        omega *= (float(np.sign(np.nansum(senses))) if np.isfinite(senses).any() else 0.0) or 1.0
+    offsets, omega = _inliers_and_rate(result, camera)
     shift = axes.refine_axis_offset(offsets, omega, camera)
     if not math.isfinite(shift) or abs(shift) < 2.0:
         return None
@@ -232,13 +228,7 @@ def _refine_fixation(
     most: it converges in one step when omega is well determined)."""
     ux, uy = axes.unit_offset(angle_deg)
     for _ in range(2):
-        inlier = result.features["inlier"]
-        used = result.features.loc[inlier, "track"]
-        offsets = result.offsets[result.offsets["track"].isin(used)]
-        omega = result.combined.omega_rad_s
-        if camera is not None:  # the pinhole model tells the sense: the rate is signed there
-            senses = result.features.loc[inlier, "sense"].to_numpy(dtype=float)
-            omega *= (float(np.sign(np.nansum(senses))) if np.isfinite(senses).any() else 0.0) or 1.0
+        offsets, omega = _inliers_and_rate(result, camera)
         if spin_up is not None:  # the rate at the halves' middles, changing steadily between them
             early, late, early_s, late_s = spin_up
             sense = omega / result.combined.omega_rad_s if result.combined.omega_rad_s else 1.0
@@ -251,3 +241,16 @@ def _refine_fixation(
         fixation = (fixation[0] + shift * ux, fixation[1] + shift * uy)
         result, camera = measure(fixation)
     return fixation, result, camera
+
+
+def _inliers_and_rate(result: RateResult, camera: rates.Camera | None) -> tuple[pd.DataFrame, float]:
+    """The inlier tracks' offsets and the combined rate, signed as the fits' sense where a pinhole
+    ``camera`` tells it (the axis refinement's model is signed there), positive otherwise."""
+    features = result.features
+    inlier = features["inlier"].to_numpy(dtype=bool)
+    offsets = result.offsets[result.offsets["track"].isin(features.loc[inlier, "track"])]
+    omega = result.combined.omega_rad_s
+    if camera is not None:
+        senses = features.loc[inlier, "sense"].to_numpy(dtype=float)
+        omega *= (float(np.sign(np.nansum(senses))) if np.isfinite(senses).any() else 0.0) or 1.0
+    return offsets, omega
