@@ -6,7 +6,10 @@ whether it covers the truth, whether the sense of turning is right, and the qual
 
 Targets (the camera-and-view issue): the bicycle wheel within 2%; the record within 1% with
 ``--fixation auto`` and with the truth's fixation; every EPFL car sequence within 3% in rad/frame
-(``--fps 1``) and in rad/s from the EXIF times; the dinosaur photographs within 1%. At least 90%
+(``--fps 1``) and in rad/s from the EXIF times; the dinosaur photographs within 1%. Also printed:
+the view found from the tracks' paths (side, oblique, frontal and the axis's elevation) and,
+where the truth gives a point on the axis and the fixation was found, how far off it is (px;
+across the axis in a side view). At least 90%
 of the intervals cover the truth, and no case is off by more than 5% without being marked weak.
 Exits 1 when a target is missed, 0 otherwise; skips (exit 0) where ../shared/data is absent.
 """
@@ -38,6 +41,7 @@ class Case:
     direction: str | None  # None: the truth does not say
     fixation_px: tuple[float, float] | None = None
     fps: float | None = None
+    truth_fixation_px: tuple[float, float] | None = None  # where the truth gives a point on the axis
 
 
 def cases() -> list[Case]:
@@ -46,18 +50,20 @@ def cases() -> list[Case]:
     wheel = videos / "bicycle_wheel_frontal.truth.json"
     if wheel.exists():
         truth = json.loads(wheel.read_text())
-        found.append(Case("bicycle_wheel_frontal", videos / "bicycle_wheel_frontal.mp4", truth["omega"], 0.02, None))
+        found.append(Case("bicycle_wheel_frontal", videos / "bicycle_wheel_frontal.mp4", truth["omega"], 0.02, None,
+                          truth_fixation_px=tuple(truth["fixation"])))
     record = videos / "record_oblique_closeup.truth.json"
     if record.exists():
         truth = json.loads(record.read_text())
         clip = videos / "record_oblique_closeup.mp4"
-        found.append(Case("record_oblique_closeup (auto)", clip, truth["omega"], 0.01, None))
+        found.append(Case("record_oblique_closeup (auto)", clip, truth["omega"], 0.01, None,
+                          truth_fixation_px=tuple(truth["fixation"])))
         found.append(Case("record_oblique_closeup (truth's fixation)", clip, truth["omega"], 0.01, None,
                           tuple(truth["fixation"])))
     for folder in sorted((DATA / "epfl_cars").glob("seq*")):
         truth = json.loads((folder / "truth.json").read_text())
         found.append(Case(f"epfl_cars/{folder.name} (rad/frame, --fps 1)", folder, truth["omega"], 0.03,
-                          truth["direction"], fps=1.0))
+                          truth["direction"], fps=1.0, truth_fixation_px=tuple(truth["fixation_approx"])))
         found.append(Case(f"epfl_cars/{folder.name} (rad/s, EXIF times)", folder, truth["omega_rad_s"], 0.03,
                           truth["direction"]))
     dinosaur = DATA / "dinosaur"
@@ -66,6 +72,26 @@ def cases() -> list[Case]:
         found.append(Case("dinosaur (--fps 1)", dinosaur / "frames", truth["radians_per_frame"], 0.01,
                           truth["direction"], fps=1.0))
     return found
+
+
+def _view(analysis) -> str:
+    view = analysis.view
+    return "unknown" if view is None else f"{view.name} {view.elevation_deg:.0f}"
+
+
+def _axis_off(case: Case, analysis) -> str:
+    """How far the found fixation lies from the truth's point on the axis, px (across the
+    axis's image for a side view, where any point along it is on the axis)."""
+    if case.truth_fixation_px is None or case.fixation_px is not None:
+        return "-"
+    found = analysis.fixation_px
+    if not all(map(math.isfinite, found)):
+        return "none"
+    dx, dy = found[0] - case.truth_fixation_px[0], found[1] - case.truth_fixation_px[1]
+    if analysis.view is not None and analysis.view.name == "side":
+        across = math.radians(analysis.view.across_deg)
+        return f"{abs(dx * math.cos(across) + dy * math.sin(across)):.0f}"
+    return f"{math.hypot(dx, dy):.0f}"
 
 
 def main() -> int:
@@ -77,7 +103,7 @@ def main() -> int:
         return 0
     chosen = [case for case in cases() if options.only in case.name]
     header = (f"{'case':<46} {'truth':>9} {'omega':>9} {'error':>8} {'95% interval (error)':>22} {'covers':>6} "
-              f"{'sense':>6} {'quality':>7} {'from':>10} {'s':>5}")
+              f"{'sense':>6} {'quality':>7} {'from':>10} {'view':>12} {'axis off':>8} {'s':>5}")
     print(header)
     print("-" * len(header))
     covered = missed = unmarked = 0
@@ -102,7 +128,8 @@ def main() -> int:
         unmarked += abs(error) > UNMARKED_LIMIT and analysis.quality != "weak"
         print(f"{case.name:<46} {case.truth_rad_s:>9.5f} {analysis.omega_rad_s:>9.5f} {100 * error:>+7.2f}% "
               f"{f'[{100 * low:+.2f}%, {100 * high:+.2f}%]':>22} {'yes' if covers else 'NO':>6} {sense:>6} "
-              f"{analysis.quality:>7} {analysis.rate_from:>10} {seconds:>5.1f}")
+              f"{analysis.quality:>7} {analysis.rate_from:>10} {_view(analysis):>12} {_axis_off(case, analysis):>8} "
+              f"{seconds:>5.1f}")
     total = len(chosen)
     coverage = covered / total if total else 1.0
     print(f"\ncases {total}; within bounds {total - missed}; intervals covering the truth {covered} "

@@ -10,14 +10,34 @@ The library never prints or exits; it raises :class:`InputError` (bad input) and
 :class:`NoResultError` (no trustworthy result), both :class:`RotrateError`.
 """
 
-from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks
-from rotrate_cli.errors import InputError, NoResultError, OutputError, RotrateError
-from rotrate_cli.outliers import RejectionConfig
-from rotrate_cli.tracking import Roi, TrackerConfig
-from rotrate_cli.tracks_io import read_tracks
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks
+    from rotrate_cli.errors import InputError, NoResultError, OutputError, RotrateError
+    from rotrate_cli.outliers import RejectionConfig
+    from rotrate_cli.tracking import Roi, TrackerConfig
+    from rotrate_cli.tracks_io import read_tracks
+
+#: Where each public name lives: imported when first used, so that the command line's start
+#: (``rotrate --help``) does not pay for OpenCV, pandas and SciPy.
+_HOMES = {
+    "Analysis": "analysis", "AnalysisConfig": "analysis", "analyze": "analysis", "analyze_tracks": "analysis",
+    "InputError": "errors", "NoResultError": "errors", "OutputError": "errors", "RotrateError": "errors",
+    "RejectionConfig": "outliers", "Roi": "tracking", "TrackerConfig": "tracking", "read_tracks": "tracks_io",
+}
 
 __all__ = [
     "Analysis", "AnalysisConfig", "InputError", "NoResultError", "OutputError", "RejectionConfig", "Roi",
     "RotrateError", "TrackerConfig", "analyze", "analyze_tracks", "read_tracks",
 ]
 __version__ = "0.1.0"
+
+
+def __getattr__(name: str) -> Any:
+    if name in _HOMES:
+        return getattr(importlib.import_module(f"rotrate_cli.{_HOMES[name]}"), name)
+    raise AttributeError(f"module 'rotrate_cli' has no attribute {name!r}")

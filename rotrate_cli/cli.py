@@ -16,57 +16,21 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
-from typing import Annotated, TypeVar
+from typing import TYPE_CHECKING, Annotated, TypeVar
 
-import cv2
-import numpy as np
 import typer
 from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    ProgressColumn,
-    Task,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
-from rich.text import Text
 
-from rotrate_cli import rates
-from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks, running_rate
-from rotrate_cli.batch import (
-    Job,
-    batch_exit_code,
-    check_expectation,
-    check_expected,
-    expand_inputs,
-    read_manifest,
-    run_batch,
-    weak_message,
-)
-from rotrate_cli.clock import read_times
-from rotrate_cli.decode import FrameSource
+# Only what --help needs is imported here: typer and rich. The library's stages (OpenCV,
+# pandas, SciPy: most of a second) are imported by the commands that run them.
+from rotrate_cli.choices import FORMATS, METHODS, PROJECTIONS, SHAPES
 from rotrate_cli.errors import InputError, RotrateError
-from rotrate_cli.focal import parse_fov
 from rotrate_cli.outputs import check_output_path, make_folder, output_format, write_text
-from rotrate_cli.overlay import draw_axis, draw_grid, frame_at, write_image, write_overlay
-from rotrate_cli.plots import write_plot
-from rotrate_cli.report import (
-    FORMATS,
-    junit_xml,
-    render,
-    render_check,
-    render_summary,
-    render_table,
-    series_csv,
-    summary_text,
-    with_units,
-)
-from rotrate_cli.synth import PROJECTIONS, SHAPES, SceneConfig, write_clip
-from rotrate_cli.tracking import Roi, TrackerConfig
-from rotrate_cli.tracks_io import read_tracks
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from rotrate_cli.analysis import Analysis, AnalysisConfig
 
 app = typer.Typer(
     name="rotrate",
@@ -157,11 +121,13 @@ def _check_format(fmt: str) -> None:
 
 
 def _check_method(method: str) -> None:
-    if method not in rates.METHODS:
-        raise InputError(f"--method must be one of {', '.join(rates.METHODS)}; got {method!r}")
+    if method not in METHODS:
+        raise InputError(f"--method must be one of {', '.join(METHODS)}; got {method!r}")
 
 
 def _emit(analysis: Analysis, fmt: str, output: Path | None, force: bool) -> None:
+    from rotrate_cli.report import render, render_table
+
     if output is not None:
         write_text(output, render(analysis, fmt), force)
         return
@@ -172,21 +138,32 @@ def _emit(analysis: Analysis, fmt: str, output: Path | None, force: bool) -> Non
         sys.stdout.flush()
 
 
-class _RateColumn(ProgressColumn):
-    """Frames per second so far."""
-
-    def render(self, task: Task) -> Text:
-        speed = task.finished_speed or task.speed
-        return Text("" if speed is None else f"{speed:.0f} frames/s")
-
-
 @contextmanager
 def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | None]:
     console = Console(stderr=True)
     if quiet or not console.is_terminal:
         yield None
         return
-    columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), _RateColumn(), TimeElapsedColumn(),
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        ProgressColumn,
+        Task,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+    from rich.text import Text
+
+    class RateColumn(ProgressColumn):
+        """Frames per second so far."""
+
+        def render(self, task: Task) -> Text:
+            speed = task.finished_speed or task.speed
+            return Text("" if speed is None else f"{speed:.0f} frames/s")
+
+    columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), RateColumn(), TimeElapsedColumn(),
                TimeRemainingColumn())
     with Progress(*columns, console=console, transient=True) as progress:
         task = progress.add_task("frames", total=None)
@@ -301,6 +278,15 @@ def analyze_command(
     """
 
     def job() -> int:
+        import numpy as np
+
+        from rotrate_cli.analysis import AnalysisConfig, analyze
+        from rotrate_cli.batch import check_expectation, check_expected, expand_inputs, weak_message
+        from rotrate_cli.clock import read_times
+        from rotrate_cli.focal import parse_fov
+        from rotrate_cli.report import series_csv, with_units
+        from rotrate_cli.tracking import Roi, TrackerConfig
+
         form = output_format(output, fmt)
         _check_format(form)
         _check_method(method)
@@ -360,6 +346,8 @@ def analyze_command(
             _write_overlay(sources[0], fps, start, end, analysis, overlay, force,
                            None if frame_times is None else np.asarray(frame_times))
         if plot is not None:
+            from rotrate_cli.plots import write_plot
+
             write_plot(analysis if units is None else with_units(analysis, *units), plot, force)
         _emit(analysis if units is None else with_units(analysis, *units), form, output, force)
         for warning in analysis.warnings:
@@ -396,6 +384,12 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
     """The overlay video of a finished analysis (see :func:`rotrate_cli.overlay.write_overlay`):
     the running rate of the tracks, or, where the rate is the clip's repetition (a whole-clip
     measurement), the reported rate throughout."""
+    import numpy as np
+
+    from rotrate_cli.analysis import running_rate
+    from rotrate_cli.decode import FrameSource
+    from rotrate_cli.overlay import write_overlay
+
     running = running_rate(analysis)
     times = running["time_s"].to_numpy()
 
@@ -435,6 +429,9 @@ def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tol
            scheduler: str | None, output_dir: Path | None, fmt: str, output: Path | None, force: bool,
            strict: bool = False) -> int:
     """Analyse several inputs; one summary row each; the worst input's exit code."""
+    from rotrate_cli.batch import Job, batch_exit_code, run_batch
+    from rotrate_cli.report import render, render_summary, summary_text
+
     details: list[Path] = []
     if output_dir is not None:
         make_folder(output_dir)
@@ -473,6 +470,10 @@ def check_command(
     """Run a regression manifest: pass when every file's omega is within its tolerance."""
 
     def job() -> int:
+        from rotrate_cli.analysis import AnalysisConfig
+        from rotrate_cli.batch import read_manifest, run_batch
+        from rotrate_cli.report import junit_xml, render_check, summary_text
+
         form = fmt or "table"
         _check_format(form)
         if junit is not None:
@@ -511,6 +512,10 @@ def frame_command(
     """Write one frame with a pixel grid and the rotation axis where it is found: read --fixation off it."""
 
     def job() -> int:
+        from rotrate_cli.analysis import AnalysisConfig, analyze
+        from rotrate_cli.decode import FrameSource
+        from rotrate_cli.overlay import draw_axis, draw_grid, frame_at, write_image
+
         if not 5 <= grid <= 10_000:
             raise InputError("--grid takes a spacing in pixels, 5 or more")
         source = FrameSource(video, fps=fps)
@@ -558,6 +563,9 @@ def omega_command(
     """Rotation rate from tracked positions in a file (for example the paper's Table I)."""
 
     def job() -> int:
+        from rotrate_cli.analysis import analyze_tracks
+        from rotrate_cli.tracks_io import read_tracks
+
         form = output_format(output, fmt)
         _check_format(form)
         _check_method(method)
@@ -603,6 +611,8 @@ def synth_command(
     """Render a synthetic clip of a spinning solid with a known rate, and its truth JSON."""
 
     def job() -> int:
+        from rotrate_cli.synth import SceneConfig, write_clip
+
         try:
             width, height = (int(v) for v in size.lower().split("x"))
         except ValueError:
@@ -625,8 +635,11 @@ def _quiet_native_logs() -> None:
     """Keep OpenCV's and FFmpeg's own log lines (e.g. "moov atom not found") off the terminal:
     the user gets our one-line message instead. ``--debug`` keeps them."""
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET; read when FFmpeg is first used
-    os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")  # read when OpenCV is imported, by the command that runs
+    if "cv2" in sys.modules:  # imported already (an embedding program): tell it directly, where it can be told
+        logging = getattr(getattr(sys.modules["cv2"], "utils", None), "logging", None)
+        if logging is not None:
+            logging.setLogLevel(logging.LOG_LEVEL_SILENT)
     # numpy's floating-point warnings on degenerate tracks are handled (NaN, rejected) by the library
     warnings.simplefilter("ignore", RuntimeWarning)
 

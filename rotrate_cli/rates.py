@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-METHODS = ("fit", "paper")
+from rotrate_cli.choices import METHODS  # noqa: F401 - re-exported
 
 
 @dataclass(frozen=True)

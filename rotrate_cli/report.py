@@ -21,8 +21,8 @@ from rich.table import Table
 
 from rotrate_cli.analysis import Analysis
 from rotrate_cli.batch import Outcome, summary_frame
+from rotrate_cli.choices import FORMATS  # noqa: F401 - re-exported
 
-FORMATS = ("table", "csv", "json")
 TABLE_ROWS = 25  # features listed in the terminal table; the CSV and JSON have them all
 
 
@@ -32,6 +32,21 @@ def _elevation_text(analysis: Analysis) -> str:
         looking = "down on" if analysis.elevation_deg >= 0 else "up at"
         return f"; camera looks {looking} it by {abs(analysis.elevation_deg):.0f} deg"
     return f"; camera elevation {analysis.elevation_deg:.0f} deg, up or down"
+
+
+def _elevation_in_view(analysis: Analysis) -> bool:
+    """True when the elevation is the view's own (said in the view row) and no lens told its sign."""
+    lens = analysis.focal is not None and math.isfinite(analysis.focal.focal_px)
+    return analysis.view is not None and not lens and analysis.elevation_deg == analysis.view.elevation_deg
+
+
+def _view_text(analysis: Analysis) -> str:
+    """The view read from the tracks' paths, in words."""
+    view = analysis.view
+    if view is None:
+        return "unknown: too few tracks follow a turning path at the reported rate"
+    return (f"{view.name}: the axis {view.elevation_deg:.0f} deg out of the image plane (0 side, 90 frontal); "
+            f"turning centre {view.centre_px[0]:.0f}, {view.centre_px[1]:.0f} px, from {view.tracks} tracks' paths")
 
 
 def _rate_from_text(analysis: Analysis) -> str:
@@ -104,6 +119,13 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "angle_found": analysis.axis_angle_found,
             "angle_from": analysis.axis_angle_from if analysis.axis_angle_found else None,
             "elevation_deg": _number(analysis.elevation_deg, 2),
+        },
+        "view": None if analysis.view is None else {
+            "name": analysis.view.name,
+            "elevation_deg": _number(analysis.view.elevation_deg, 2),
+            "centre_px": [_number(v, 2) for v in analysis.view.centre_px],
+            "centre_spread_px": _number(analysis.view.centre_spread_px, 2),
+            "tracks": analysis.view.tracks,
         },
         "camera": None if analysis.focal is None else {
             "found": True,
@@ -186,7 +208,9 @@ def render_table(analysis: Analysis, console: Console) -> None:
         summary.add_row("axis", f"{analysis.axis_angle_deg:+.2f} deg from vertical (top end "
                         f"{'right' if analysis.axis_angle_deg >= 0 else 'left'})"
                         + (f"  (found from the {analysis.axis_angle_from})" if analysis.axis_angle_found else "")
-                        + ("" if math.isnan(analysis.elevation_deg) else _elevation_text(analysis)))
+                        + ("" if math.isnan(analysis.elevation_deg) or _elevation_in_view(analysis)
+                           else _elevation_text(analysis)))
+    summary.add_row("view", _view_text(analysis))
     if analysis.focal is not None:
         summary.add_row("camera", "no perspective seen: orthographic" if not math.isfinite(analysis.focal.focal_px)
                         else f"found: focal {analysis.focal.focal_px:.0f} px (field of view "

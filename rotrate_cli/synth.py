@@ -22,10 +22,9 @@ import cv2
 import numpy as np
 from scipy import ndimage
 
+from rotrate_cli.choices import PROJECTIONS, SHAPES  # noqa: F401 - re-exported
 from rotrate_cli.errors import InputError, OutputError
 
-SHAPES = ("box", "cylinder", "sphere")
-PROJECTIONS = ("orthographic", "perspective")
 _BOX_HALF = np.array([0.85, 0.95, 0.6])
 _CYLINDER = (0.8, 0.95)  # radius, half-height
 _SPHERE_RADIUS = 1.0

@@ -177,13 +177,13 @@ def test_the_expectation_rule_is_the_point_estimate() -> None:
 
 
 def test_ctrl_c_mid_run_exits_130_and_leaves_no_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from rotrate_cli import cli
+    from rotrate_cli import analysis
 
     def interrupted(*_args: object, **_kwargs: object) -> None:
         raise KeyboardInterrupt
 
     target = tmp_path / "report.json"
-    monkeypatch.setattr(cli, "analyze", interrupted)
+    monkeypatch.setattr(analysis, "analyze", interrupted)  # the command imports it when it runs
     result = runner.invoke(app, ["analyze", str(CLIPS[0]), "--fixation", "auto", "-f", "json", "-o", str(target)])
     assert result.exit_code == 130 and "interrupted" in result.stderr
     assert list(tmp_path.iterdir()) == []

@@ -86,3 +86,15 @@ def test_the_papers_method_takes_the_papers_spacing() -> None:
     result = runner.invoke(app, ["analyze", CLIP, *FIX, "--method", "paper", "-f", "json"])
     assert result.exit_code == 0, result.output
     assert json.loads(result.stdout)["omega"] == pytest.approx(0.6, rel=0.05)
+
+
+def test_the_command_line_starts_without_the_heavy_libraries() -> None:
+    """`rotrate --help` (and a shell loop's every start) must not pay for OpenCV, pandas or
+    SciPy: the commands import the stages they run. Timed in `make bench`; checked here."""
+    import subprocess
+    import sys
+
+    code = ("import sys, rotrate_cli.cli, rotrate_cli; "
+            "print(','.join(m for m in ('cv2', 'pandas', 'scipy', 'numpy') if m in sys.modules))")
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert loaded == ""

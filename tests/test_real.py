@@ -5,6 +5,7 @@ bicycle wheel seen face on, and the record seen obliquely. Skipped where the dat
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -40,6 +41,8 @@ def test_bicycle_wheel_seen_face_on() -> None:
     assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.02)
     assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
     assert analysis.rate_from == "repetition"
+    # its tracks are points sliding along the rim: they tell no view, and none is claimed
+    assert analysis.view is None
 
 
 @pytest.mark.parametrize("fixation", [None, "truth"])
@@ -53,6 +56,12 @@ def test_record_seen_obliquely(fixation: str | None) -> None:
     assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.01)
     assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
     assert analysis.quality == "good"
+    # the view from the label's paths: seen from above at a slant, and the found axis is the
+    # spindle (read by eye, +-5 px; through the close lens the paths' centre sits ~20 px off)
+    assert analysis.view is not None and analysis.view.name == "oblique"
+    assert 10 <= analysis.view.elevation_deg <= 40
+    if fixation is None:
+        assert math.dist(analysis.fixation_px, truth["fixation"]) < 40
 
 
 def test_real_cases_are_never_confidently_wrong() -> None:
