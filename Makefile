@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow lint bench bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov clean
+.PHONY: demo test test-slow test-floor lint bench bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -24,6 +24,17 @@ test: $(STAMP)
 ## test-slow: longer suites (rendering on the fly, long clips)
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -q -m slow
+
+## test-floor: the declared oldest dependency versions (constraints/floor.txt), in .venv-floor: the fast core of the suite
+FLOOR := .venv-floor
+$(FLOOR)/.installed: pyproject.toml constraints/floor.txt
+	$(PYTHON) -m venv $(FLOOR)
+	$(FLOOR)/bin/pip install --quiet --upgrade pip
+	$(FLOOR)/bin/pip install --quiet -c constraints/floor.txt -e '.[dev]'
+	touch $(FLOOR)/.installed
+
+test-floor: $(FLOOR)/.installed
+	$(FLOOR)/bin/python -m pytest -q tests/test_decode.py tests/test_cli.py tests/test_cli_polish.py tests/test_samples.py tests/test_rates.py tests/test_view.py tests/test_real_files.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check rotrate_cli tests benchmarks
@@ -53,4 +64,4 @@ bench-accuracy-given-fov: $(STAMP)
 	$(BIN)/python benchmarks/bench_accuracy.py --given-fov
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache bench_out
+	rm -rf $(VENV) $(FLOOR) .pytest_cache .ruff_cache bench_out

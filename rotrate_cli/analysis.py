@@ -15,7 +15,6 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from rotrate_cli import axis as axes
 from rotrate_cli.chosen import follow_points
@@ -43,6 +42,7 @@ from rotrate_cli.geometry import (
     prepare_body,
     with_lens_doubt,
 )
+from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import (
     FEATURE_COLUMNS,
@@ -224,7 +224,17 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         raise InputError(f"no frame of {source} lies between --start and --end")
     if count < 3:
         raise InputError(f"{source} has only {count} frame(s) to analyse; rotation needs at least 3")
+    if run.tracks.empty and thumbnails.lifeless_fraction() >= LIFELESS and video.use_ffmpeg():
+        # OpenCV's trouble with interlaced streams: black frames, or one frozen garbled picture;
+        # it strikes some openings of a file and not others, so it is caught here too
+        thumbnails.clear()
+        run = _track(video, config, tracker, progress, thumbnails)
+        count = run.frames
     if run.tracks.empty:
+        if thumbnails.lifeless_fraction() >= LIFELESS:
+            raise InputError(f"the frames of {source} decode black or frozen: if the video shows motion, it is "
+                             "probably interlaced (camcorder, broadcast, DV), which this OpenCV cannot decode: "
+                             "deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4) or pip install 'rotrate[ffmpeg]'")
         raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
     everything = _by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
@@ -255,12 +265,15 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
                 angle, elevation_found = shape.angle_deg, shape.elevation_deg
                 if config.elevation_deg is None:
                     config = replace(config, elevation_deg=elevation_found)
-    expected = info.frame_count
+    # the decoder may have learnt something while it read (a stream OpenCV decodes black)
+    warnings_early += [warning for warning in video.warnings if warning not in warnings_early]
     warnings = list(run.notes) + warnings_early
     if assumed_vertical:
         warnings.append("too few tracks to find the axis's angle: taken as vertical (give --axis-angle DEG)")
-    if expected and config.start_s == 0 and config.end_s is None and count < expected - 1:
-        warnings.append(f"decoded {count} of the {expected} frames the file announces; it may be cut off")
+    if config.start_s == 0 and config.end_s is None:
+        short = video.shortfall(count, run.last_time_s)
+        if short is not None:
+            warnings.append(short)
 
     duration_s = run.last_time_s - run.first_time_s
     del run
@@ -300,7 +313,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
                 context["elevation_deg"] = focal.elevation_deg
     del everything  # the offsets hold what is needed: a long clip's positions need not stay
     release_free_memory()
-    fixation, result, camera = measure_body(body, angle, config, size_px)
+    fixation, result, camera = measure_body(body, angle, config, size_px, steady=period is not None)
     del body
     if focal is not None and math.isfinite(focal.focal_px) and result.combined.tracks_used > 0:
         result = with_lens_doubt(result, focal, fixation, angle, config, size_px)
@@ -365,6 +378,11 @@ def _with_view(analysis: Analysis, view_tracks: pd.DataFrame, config: AnalysisCo
     if config.fixation_px is None and analysis.rate_from == "repetition":
         changes["fixation_px"] = view.centre_px
     return replace(analysis, **changes)
+
+
+#: A run whose frames are this often black, or the same as the one before pixel for pixel, got
+#: nothing from its decoder (see :meth:`rotrate_cli.period.Thumbnails.lifeless_fraction`).
+LIFELESS = 0.5
 
 
 #: The paper's method differentiates positions this far apart in angle (its 16 frames at 30 fps

@@ -24,8 +24,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
+from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.ragged import Ragged
 from rotrate_cli.rates import Camera, solve_two_columns
 

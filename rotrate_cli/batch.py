@@ -17,11 +17,10 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import pandas as pd
-
 from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze
 from rotrate_cli.errors import InputError, NoResultError, RotrateError
 from rotrate_cli.focal import parse_fov
+from rotrate_cli.lazy import pandas as pd
 
 VIDEO_SUFFIXES = frozenset({".mp4", ".mov", ".avi", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"})
 SUMMARY_COLUMNS = ("file", "status", "omega", "omega_low", "omega_high", "rpm", "direction", "tracks_used",

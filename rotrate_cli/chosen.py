@@ -17,10 +17,10 @@ from collections.abc import Callable, Iterable
 
 import cv2
 import numpy as np
-import pandas as pd
 
 from rotrate_cli.decode import Frame
 from rotrate_cli.errors import InputError
+from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.tracking import TrackerConfig, TrackingRun, tracking_scale
 
 TRACKERS = ("klt", "csrt")

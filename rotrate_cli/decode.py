@@ -71,6 +71,18 @@ class Frame:
     image: Any
 
 
+#: The fraction of the announced frames a file other than an MP4/MOV may lack without a warning.
+ANNOUNCED_SLACK = 0.1
+#: Failed frames in a row after which a video is taken to have ended (a damaged spot is a few).
+MAX_FAILED_RUN = 48
+#: Frames probed at the start of a video whose first frame decodes black (see :mod:`rotrate_cli.pipe`).
+BLACK_PROBE = 12
+#: Codecs whose luma plane OpenCV hands over faster than its BGR conversion (FOURCC, upper case).
+#: For others it is slower, though it skips the conversion: 720p, 240 frames, luma against BGR
+#: and grey conversion, seconds: MPEG-4 part 2 (FMP4) 0.15 / 0.26, MJPEG 0.54 / 0.57; H.264
+#: 0.68 / 0.37, HEVC 0.73 / 0.61, VP9 0.70 / 0.64, and on the real record clip (H.264, 722
+#: frames) 2.30 / 1.76. Their grey is converted from BGR.
+LUMA_CODECS = frozenset({"FMP4", "MP4V", "XVID", "DIVX", "DX50", "MJPG"})
 #: Checks of the decoder's own luma against its colour conversion (see :meth:`FrameSource.frames`):
 #: the gain must be near that of studio-range luma (255/219), and the fit within this many levels.
 _LUMA_GAIN_RANGE = (0.9, 1.3)
@@ -81,12 +93,16 @@ _LUMA_MAX_RMS = 2.0
 def _quiet_opencv() -> Iterator[None]:
     """Silence OpenCV's log for a while: the FFmpeg backend warns on stderr every time it is
     asked for undecoded (luma) frames, which we check ourselves."""
-    level = cv2.utils.logging.getLogLevel()
-    cv2.utils.logging.setLogLevel(min(level, cv2.utils.logging.LOG_LEVEL_ERROR))
+    logging = getattr(getattr(cv2, "utils", None), "logging", None)  # not in every OpenCV build (4.9-4.12)
+    if logging is None:
+        yield
+        return
+    level = logging.getLogLevel()
+    logging.setLogLevel(min(level, logging.LOG_LEVEL_ERROR))
     try:
         yield
     finally:
-        cv2.utils.logging.setLogLevel(level)
+        logging.setLogLevel(level)
 
 
 def _natural_key(name: str) -> list[Any]:
@@ -150,6 +166,10 @@ class FrameSource:
         self._times = None if times_s is None else np.asarray(times_s, dtype=np.float64)
         self.warnings: list[str] = []
         self._files: list[Path] | None = None
+        self._codec = ""  # the stream's FOURCC, upper case (a video's)
+        self._pipe: str | None = None  # the FFmpeg program that decodes what OpenCV gives black
+        #: frames that could not be decoded between good ones, over all reads so far
+        self.failed_frames = 0
         self._first_grey: np.ndarray | None = None  # a thumbnail of a video's first frame, to check its luma
         self._luma: tuple[np.ndarray | None] | None = None  # the checked luma table, once checked
         path = Path(self._source)
@@ -181,8 +201,10 @@ class FrameSource:
                 )
             container_fps = float(capture.get(cv2.CAP_PROP_FPS) or 0.0)
             count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+            fourcc = int(capture.get(cv2.CAP_PROP_FOURCC) or 0)
         finally:
             capture.release()
+        self._codec = fourcc.to_bytes(4, "little").decode("latin-1").strip("\x00 ").upper() if fourcc > 0 else ""
         if fps is None:
             if not (MIN_FPS <= container_fps <= MAX_FPS and math.isfinite(container_fps)):
                 raise InputError(f"could not read the frame rate of {self._source}; pass --fps")
@@ -191,6 +213,8 @@ class FrameSource:
             self.warnings.append(f"--fps {fps:g} differs from the stream's own rate ({container_fps:.4g} frames/s); "
                                  "the times used are index / --fps")
         height, width = first.shape[:2]
+        if first.max() == 0:
+            first = self._black_start(first, width, height)
         self._first_grey = _grey(first)[::4, ::4]
         if self._times is not None and count > 0 and len(self._times) != count:
             raise InputError(f"--times gives {len(self._times)} times but {self._source} announces {count} frames; "
@@ -209,6 +233,102 @@ class FrameSource:
             fps is not None or self._times is not None,
             "times file" if self._times is not None else "fps" if fps is not None else "container",
         )
+
+    def _starts_black(self) -> bool:
+        """True when the first :data:`BLACK_PROBE` frames (or all, if fewer) decode all black."""
+        capture = self._open_capture()
+        try:
+            for _ in range(BLACK_PROBE):
+                ok, image = capture.read()
+                if not ok or image is None:
+                    return True
+                if image.max() > 0:
+                    return False
+            return True
+        finally:
+            capture.release()
+
+    def _black_start(self, first: np.ndarray, width: int, height: int) -> np.ndarray:
+        """A video whose first frame OpenCV decodes black: read through FFmpeg where FFmpeg shows
+        a picture there (an interlaced stream, see :mod:`rotrate_cli.pipe`), with a warning;
+        without FFmpeg, said to the user when the first frames stay black. (OpenCV itself is no
+        judge: on an interlaced H.264 file, the first two openings in a process gave black frames
+        and the later ones pictures.) Returns the first frame to use."""
+        from rotrate_cli.pipe import ffmpeg_program, first_frame
+
+        program = ffmpeg_program()
+        piped = first_frame(program, self._source, width, height) if program is not None else None
+        if piped is not None and piped.max() > 0:
+            self._pipe, self._codec = program, "PIPE"
+            self.warnings.append("OpenCV decodes this video's frames black (an interlaced stream: camcorder, "
+                                 "broadcast, DV?); it is read through FFmpeg instead, deinterlaced")
+            return piped
+        if program is None and self._starts_black():
+            self.warnings.append(f"the first frames of {self._source} decode black; if the video is not black there "
+                                 "it is probably interlaced, which this OpenCV decodes as black: deinterlace it "
+                                 "(ffmpeg -i IN -vf yadif OUT.mp4) or pip install 'rotrate[ffmpeg]'")
+        return first
+
+    def use_ffmpeg(self) -> bool:
+        """Read the video through FFmpeg from now on (see :mod:`rotrate_cli.pipe`), for a caller
+        that got nothing from OpenCV: True when it can be, and was not already."""
+        from rotrate_cli.pipe import ffmpeg_program
+
+        program = ffmpeg_program() if self._files is None and self._pipe is None else None
+        if program is None:
+            return False
+        self._pipe, self._codec = program, "PIPE"
+        self.warnings.append("OpenCV decodes this video's frames black or frozen (an interlaced stream: camcorder, "
+                             "broadcast, DV?); it is read through FFmpeg instead, deinterlaced")
+        return True
+
+    def _decodes_black(self, capture: cv2.VideoCapture, quiet: bool) -> bool:
+        """True when this opening decodes the first frame black though the opening that read it
+        first did not (the capture is at the first frame, grabbed)."""
+        if self._pipe is not None or self._first_grey is None or self._first_grey.max() == 0:
+            return False
+        if quiet:
+            with _quiet_opencv():
+                ok, image = capture.retrieve()
+        else:
+            ok, image = capture.retrieve()
+        return bool(ok and image is not None and image.max() == 0)
+
+    def _piped(self, start_s: float, end_s: float | None, convert: Callable[[np.ndarray], Any],
+               switched: bool = False) -> Iterator[Frame]:
+        """The frames through FFmpeg (see :meth:`_black_start`), timed ``index / fps`` or by
+        ``--times``. ``switched``: OpenCV was found decoding black mid-way (see
+        :meth:`_decodes_black`); FFmpeg takes over, or the user is told how to get the frames.
+
+        Raises:
+            InputError: switched, and there is no FFmpeg program.
+        """
+        from rotrate_cli.pipe import ffmpeg_program, piped_frames
+
+        if switched:
+            program = ffmpeg_program()
+            if program is None:
+                raise InputError(f"OpenCV decodes the frames of {self._source} black (an interlaced stream: camcorder, "
+                                 "broadcast, DV?): deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4) or pip install "
+                                 "'rotrate[ffmpeg]'")
+            self._pipe, self._codec = program, "PIPE"
+            self.warnings.append("OpenCV decodes this video's frames black (an interlaced stream: camcorder, "
+                                 "broadcast, DV?); it is read through FFmpeg instead, deinterlaced")
+        assert self._pipe is not None  # noqa: S101 - only called in pipe mode
+        for index, image in enumerate(piped_frames(self._pipe, self._source, self.info.width_px,
+                                                   self.info.height_px)):
+            if self._times is not None:
+                if index >= len(self._times):
+                    raise InputError(f"--times gives {len(self._times)} times but {self._source} has more frames; "
+                                     "give one time per frame")
+                time_s = float(self._times[index])
+            else:
+                time_s = index / self.info.fps
+            if time_s < start_s - 1e-9:
+                continue
+            if end_s is not None and time_s > end_s + 1e-9:
+                return
+            yield Frame(index, time_s, convert(image))
 
     def _sequence_info(self, width: int, height: int, fps: float | None) -> VideoInfo:
         """An image sequence's info and clock: ``--times``, else its EXIF capture times, else
@@ -242,6 +362,11 @@ class FrameSource:
         capture = cv2.VideoCapture(self._source, cv2.CAP_FFMPEG)
         if not capture.isOpened():
             capture.release()
+            damage = _mp4_damage(Path(self._source))
+            if damage is not None:
+                raise InputError(f"{self._source} is a damaged or truncated {damage}; it cannot be read (was the "
+                                 "recording cut off? a tool such as untrunc can rebuild the index from a good file "
+                                 "of the same camera)")
             raise InputError(f"could not open {self._source} as a video; is it a video file (mp4, mov, avi, mkv)?")
         return capture
 
@@ -289,6 +414,9 @@ class FrameSource:
                 yield Frame(index, time_s, convert(image))
             return
 
+        if self._pipe is not None:
+            yield from self._piped(start_s, end_s, convert)
+            return
         yield from self._video_frames(self._open_capture(), start_s, end_s, convert)
 
     def _video_frames(
@@ -297,15 +425,30 @@ class FrameSource:
     ) -> Iterator[Frame]:
         """The frames of an open video capture between ``start_s`` and ``end_s``, converted;
         the capture is released at the end. ``quiet`` silences OpenCV's log while retrieving."""
+        failed = 0  # frames that could not be decoded since the last good one
         try:
             index = -1
             last_time_s = -math.inf
             while True:
                 if not capture.grab():
-                    return
+                    # a damaged spot: FFmpeg goes on after it (a clean end fails every time)
+                    index += 1
+                    failed += 1
+                    if failed > MAX_FAILED_RUN:
+                        return
+                    continue
                 index += 1
                 time_s = self._frame_time_s(capture, index, last_time_s)
+                if failed:
+                    self._note_failed(failed, last_time_s, time_s)
+                    failed = 0
                 last_time_s = time_s
+                if index == 0 and self._decodes_black(capture, quiet):
+                    # OpenCV's interlaced trouble strikes some openings and not others: this one is
+                    # black where the opening that read the first frame was not
+                    capture.release()
+                    yield from self._piped(start_s, end_s, convert, switched=True)
+                    return
                 if time_s < start_s - 1e-9:
                     continue
                 if end_s is not None and time_s > end_s + 1e-9:
@@ -316,10 +459,45 @@ class FrameSource:
                 else:
                     ok, image = capture.retrieve()
                 if not ok or image is None or image.shape[:2] != (self.info.height_px, self.info.width_px):
-                    return
+                    failed += 1
+                    continue
                 yield Frame(index, time_s, convert(image))
         finally:
             capture.release()
+
+    def shortfall(self, decoded: int, last_time_s: float) -> str | None:
+        """A warning when a whole read of the video (``decoded`` frames, the last at
+        ``last_time_s``) ended well before the file says it does; None otherwise.
+
+        An MP4/MOV is judged by its own duration (its ``mvhd``), against the last frame's time:
+        a stream-copied trim announces the frames from the key frame before its cut, which it
+        does not show (92 shown of 101 announced), and is not cut off. Other files are judged by
+        the frames they announce, less those that could not be decoded, with room for
+        :data:`ANNOUNCED_SLACK` of them (a variable-rate AVI announces dropped frames).
+        """
+        expected = self.info.frame_count
+        if self._files is not None or not expected or decoded == 0:
+            return None
+        duration_s = _mp4_duration_s(Path(self._source))
+        step_s = 1.0 / self.info.fps
+        if duration_s is not None and math.isfinite(last_time_s):
+            if last_time_s + step_s >= duration_s - 2.0 * step_s:
+                return None
+            return (f"the last frame decoded is at {last_time_s:.2f} s of the {duration_s:.2f} s the file announces; "
+                    "it may be cut off or damaged")
+        missing = expected - decoded - self.failed_frames
+        if missing <= max(2, ANNOUNCED_SLACK * expected):
+            return None
+        return f"decoded {decoded} of the {expected} frames the file announces; it may be cut off or damaged"
+
+    def _note_failed(self, count: int, before_s: float, after_s: float) -> None:
+        """Say that ``count`` frames between two decoded ones could not be decoded."""
+        self.failed_frames += count
+        where = (f"between {before_s:.2f} s and {after_s:.2f} s" if math.isfinite(before_s)
+                 else f"before {after_s:.2f} s")
+        note = f"{count} frame(s) of {self._source} could not be decoded {where} (a damaged spot); the rest were read"
+        if note not in self.warnings:
+            self.warnings.append(note)
 
     def _open_luma_capture(self) -> cv2.VideoCapture:
         with _quiet_opencv():
@@ -333,9 +511,10 @@ class FrameSource:
         The grey of BGR is, up to rounding, a straight-line function of studio-range luma, since
         the chroma terms of the YUV-to-RGB conversion cancel in the grey weights; the line is
         fitted on the first frame, and the luma is used only where it fits within
-        :data:`_LUMA_MAX_RMS` grey levels.
+        :data:`_LUMA_MAX_RMS` grey levels. None too for codecs whose luma is slower to have than
+        the conversion (not in :data:`LUMA_CODECS`): their frames come converted from BGR.
         """
-        if self._first_grey is None:
+        if self._first_grey is None or self._codec not in LUMA_CODECS:
             return None
         if self._luma is None:
             capture = self._open_luma_capture()
@@ -367,7 +546,7 @@ class FrameSource:
     ) -> Iterator[Frame] | None:
         """The frames from the decoder's luma, or None when the luma does not check out. When
         the stream starts at the first frame, that frame is the check (no second opening)."""
-        if self._first_grey is None:
+        if self._first_grey is None or self._codec not in LUMA_CODECS:
             return None
         if self._luma is None and start_s <= 0:
             raw = self._video_frames(self._open_luma_capture(), start_s, end_s, lambda luma: luma, quiet=True)
@@ -405,6 +584,74 @@ class FrameSource:
         if not math.isfinite(stamp_ms) or stamp_ms < 0 or (index > 0 and stamp_ms / 1000.0 <= last_time_s):
             return fallback
         return stamp_ms / 1000.0
+
+
+def _mp4_boxes(path: Path) -> list[tuple[bytes, int, int, bool]] | None:
+    """The top-level boxes of an MP4/MOV/3GP file as ``(type, offset, length, whole)``, or None
+    when the file does not start with an ``ftyp`` box."""
+    try:
+        size = path.stat().st_size
+        boxes = []
+        with path.open("rb") as file:
+            offset = 0
+            while offset + 8 <= size and len(boxes) < 64:
+                file.seek(offset)
+                header = file.read(16)
+                length, kind = int.from_bytes(header[:4], "big"), header[4:8]
+                if length == 1 and len(header) >= 16:
+                    length = int.from_bytes(header[8:16], "big")
+                elif length == 0:
+                    length = size - offset
+                if length < 8 or not kind.isalnum():
+                    break
+                boxes.append((kind, offset, length, offset + length <= size))
+                offset += length
+    except OSError:
+        return None
+    return boxes if boxes and boxes[0][0] == b"ftyp" else None
+
+
+def _mp4_duration_s(path: Path) -> float | None:
+    """An MP4/MOV's duration from its movie header (``moov/mvhd``), seconds; None where there
+    is none to read."""
+    boxes = _mp4_boxes(path)
+    moov = next(((offset, length) for kind, offset, length, whole in boxes or [] if kind == b"moov" and whole), None)
+    if moov is None:
+        return None
+    try:
+        with path.open("rb") as file:
+            file.seek(moov[0] + 8)
+            inner = file.read(min(moov[1] - 8, 1 << 20))
+    except OSError:
+        return None
+    at = 0
+    while at + 8 <= len(inner):
+        length, kind = int.from_bytes(inner[at:at + 4], "big"), inner[at + 4:at + 8]
+        if kind == b"mvhd" and at + 32 <= len(inner):
+            version = inner[at + 8]
+            body = inner[at + 12:]
+            if version == 1:
+                timescale, duration = int.from_bytes(body[16:20], "big"), int.from_bytes(body[20:28], "big")
+            else:
+                timescale, duration = int.from_bytes(body[8:12], "big"), int.from_bytes(body[12:16], "big")
+            return duration / timescale if timescale > 0 and duration > 0 else None
+        if length < 8:
+            return None
+        at += length
+    return None
+
+
+def _mp4_damage(path: Path) -> str | None:
+    """What is wrong with a file that looks like an MP4/MOV/3GP but cannot be opened: its index
+    (the ``moov`` box) missing or cut, as when a recording stops before the camera writes it;
+    None when it does not look like one, or looks whole."""
+    boxes = _mp4_boxes(path)
+    if boxes is None:
+        return None
+    moov = [whole for kind, _, _, whole in boxes if kind == b"moov"]
+    if moov and all(moov):
+        return None
+    return "MP4/MOV file: its index (the 'moov' box) is " + ("cut short" if moov else "missing")
 
 
 def _mean_rate(times_s: np.ndarray) -> float:

@@ -9,11 +9,11 @@ from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
 from rotrate_cli import rates
 from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.joint import joint_fit
+from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import (
     Combined,

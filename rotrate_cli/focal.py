@@ -32,10 +32,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
 from rotrate_cli.axis import unit_offset
 from rotrate_cli.errors import InputError
+from rotrate_cli.lazy import pandas as pd
 
 #: Tracks and samples per track the fit uses: the longest tracks, evenly thinned. The shared
 #: unknowns are three; more data than this narrows them little and costs time.

@@ -28,9 +28,9 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import pandas as pd
-from scipy.special import stdtrit
 
+from rotrate_cli.lazy import pandas as pd
+from rotrate_cli.lazy import student_t_975
 from rotrate_cli.outliers import Combined
 from rotrate_cli.ragged import Ragged
 from rotrate_cli.rates import Camera, solve_two_columns
@@ -208,7 +208,7 @@ def _jackknife_half_width(estimates: np.ndarray) -> float:
     """Half-width of the 95% t-interval from delete-one estimates."""
     m = len(estimates)
     se = math.sqrt((m - 1) / m * float(((estimates - estimates.mean()) ** 2).sum()))
-    return float(stdtrit(m - 1, 0.975)) * se
+    return student_t_975(m - 1) * se
 
 
 def _delete_one_group(grid: np.ndarray, weighted: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
@@ -263,5 +263,5 @@ def _single(grid: np.ndarray, total: np.ndarray, omega: float, samples: float) -
     if curvature <= 0:
         return Combined(omega, math.nan, math.nan, 1)
     se = math.sqrt(2.0 * max(residual_variance, 1e-12) / curvature)
-    half = float(stdtrit(max(samples - 3.0, 1.0), 0.975)) * se
+    half = student_t_975(max(samples - 3.0, 1.0)) * se
     return Combined(omega, max(omega - half, 0.0), omega + half, 1)

@@ -14,9 +14,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
-from scipy.special import stdtrit
 
+from rotrate_cli.lazy import pandas as pd
+from rotrate_cli.lazy import student_t_975
 from rotrate_cli.rates import TrackFit
 
 FEATURE_COLUMNS = (
@@ -147,7 +147,7 @@ def combine(omega_rad_s: np.ndarray, se_rad_s: np.ndarray) -> Combined:
     # Hartung-Knapp style rescaling keeps the interval honest when the tracks scatter.
     spread = float(weights @ (omega - mean) ** 2) / (k - 1)
     standard_error *= math.sqrt(max(spread, 1.0))
-    half = float(stdtrit(k - 1, 0.975)) * standard_error
+    half = student_t_975(k - 1) * standard_error
     return Combined(mean, max(mean - half, 0.0), mean + half, k)
 
 
@@ -160,7 +160,7 @@ def combine_plain(values: np.ndarray) -> Combined:
     mean = float(values.mean())
     if k == 1:
         return Combined(mean, math.nan, math.nan, 1)
-    half = float(stdtrit(k - 1, 0.975)) * float(values.std(ddof=1)) / math.sqrt(k)
+    half = student_t_975(k - 1) * float(values.std(ddof=1)) / math.sqrt(k)
     return Combined(mean, mean - half, mean + half, k)
 
 

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-import pandas as pd
 
 from rotrate_cli.axis import unit_offset
 from rotrate_cli.decode import Frame, FrameSource
 from rotrate_cli.errors import InputError, OutputError
+from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.outputs import replacing
 
 #: Colours (BGR).

@@ -134,6 +134,18 @@ class Thumbnails:
         self._images.append(np.asarray(small, dtype=np.uint8).ravel())
         self._times.append(float(time_s))
 
+    def lifeless_fraction(self) -> float:
+        """The fraction of the frames seen whose thumbnail is all black or the same, pixel for
+        pixel, as the frame before (0 when none were seen): what a decoder gives that hands back
+        nothing (a camera's picture always changes a little, if only by its noise)."""
+        images = self._images
+        if not images:
+            return 0.0
+        dead = sum(not image.any() for image in images[:1])
+        dead += sum(not image.any() or np.array_equal(image, before)
+                    for before, image in zip(images, images[1:], strict=False))
+        return dead / len(images)
+
     def clear(self) -> None:
         self._images.clear()
         self._times.clear()

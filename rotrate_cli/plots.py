@@ -12,10 +12,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from rotrate_cli.analysis import Analysis, running_rate
 from rotrate_cli.errors import InputError
+from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.outputs import check_output_path, replacing
 from rotrate_cli.rates import solve_two_columns
 

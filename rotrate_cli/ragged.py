@@ -14,7 +14,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
+
+from rotrate_cli.lazy import pandas as pd
 
 
 @dataclass(frozen=True)

@@ -27,9 +27,9 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
 import numpy as np
-import pandas as pd
 
 from rotrate_cli.choices import METHODS  # noqa: F401 - re-exported
+from rotrate_cli.lazy import pandas as pd
 
 
 @dataclass(frozen=True)

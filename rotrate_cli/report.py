@@ -15,13 +15,13 @@ from dataclasses import replace
 from typing import Any
 from xml.etree import ElementTree as ET
 
-import pandas as pd
 from rich.console import Console
 from rich.table import Table
 
 from rotrate_cli.analysis import Analysis
 from rotrate_cli.batch import Outcome, summary_frame
 from rotrate_cli.choices import FORMATS  # noqa: F401 - re-exported
+from rotrate_cli.lazy import pandas as pd
 
 TABLE_ROWS = 25  # features listed in the terminal table; the CSV and JSON have them all
 

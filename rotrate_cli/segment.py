@@ -19,9 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
 from rotrate_cli.joint import track_misfits
+from rotrate_cli.lazy import pandas as pd
 
 #: Lags (frames) at which each track's recurrence is fitted; the longest one that turns the
 #: track by at most :data:`_MAX_TURN_RAD` and leaves :data:`_MIN_TRIPLES` triples is used.

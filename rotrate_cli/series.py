@@ -18,8 +18,8 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import pandas as pd
 
+from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.outliers import Combined
 
 SERIES_COLUMNS = ("time_s", "omega_rad_s", "omega_low_rad_s", "omega_high_rad_s", "tracks_used")

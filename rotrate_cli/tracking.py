@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-import pandas as pd
 
 from rotrate_cli.decode import Frame
+from rotrate_cli.lazy import pandas as pd
 
 KNOWN_LEVELS = 0
 #: Lucas-Kanade stopping rule (iterations, last step in px) of the forward pass, which gives the

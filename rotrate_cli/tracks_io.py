@@ -11,9 +11,9 @@ import io
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from rotrate_cli.errors import InputError
+from rotrate_cli.lazy import pandas as pd
 
 MAX_BYTES = 512 * 1024 * 1024
 

@@ -22,7 +22,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
+
+from rotrate_cli.lazy import pandas as pd
 
 #: Tracks that speak for the view: at least this many samples, turning through at least this
 #: much (rad) at the measured rate, fitting their ellipse within this misfit (px) and moving at

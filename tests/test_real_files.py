@@ -1,0 +1,143 @@
+"""The files people have, made at test time with FFmpeg (imageio-ffmpeg, a dev dependency) from
+the bundled box clip (truth 0.6 rad/s): interlaced H.264, a damaged spot, an MP4 cut before its
+index was written, one cut after, a stream-copied trim; and an OpenCV without ``cv2.utils.logging``
+(4.9-4.12, the declared floor)."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from rotrate_cli.analysis import AnalysisConfig, analyze
+from rotrate_cli.cli import app
+from tests.conftest import SAMPLES
+
+imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg", reason="the dev dependency imageio-ffmpeg makes these files")
+BOX = SAMPLES / "box_ortho.mp4"
+FIXATION = ["--fixation", "319.5,179.5"]
+runner = CliRunner()
+
+
+def _ffmpeg(*arguments: str) -> None:
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-loglevel", "error", "-y", *arguments],
+                   check=True)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("real_files")
+    made = {name: folder / name for name in ("interlaced.mp4", "h264.mp4", "damaged.mp4", "no_index.mp4",
+                                             "faststart.mp4", "cut.mp4", "trim.mp4")}
+    _ffmpeg("-i", str(BOX), "-c:v", "libx264", "-flags", "+ildct+ilme", "-x264-params", "interlaced=1:tff=1",
+            "-pix_fmt", "yuv420p", str(made["interlaced.mp4"]))
+    _ffmpeg("-i", str(BOX), "-c:v", "libx264", "-g", "30", "-pix_fmt", "yuv420p", str(made["h264.mp4"]))
+    whole = made["h264.mp4"].read_bytes()
+    damaged = bytearray(whole)
+    spot = int(len(whole) * 0.4)
+    damaged[spot:spot + 3000] = bytes(3000)  # 3 KB of zeros in the middle of the picture data
+    made["damaged.mp4"].write_bytes(bytes(damaged))
+    made["no_index.mp4"].write_bytes(whole[:int(len(whole) * 0.6)])  # its index comes last: cut away
+    _ffmpeg("-i", str(made["h264.mp4"]), "-c", "copy", "-movflags", "+faststart", str(made["faststart.mp4"]))
+    indexed = made["faststart.mp4"].read_bytes()
+    made["cut.mp4"].write_bytes(indexed[:int(len(indexed) * 0.6)])  # index first, pictures cut short
+    _ffmpeg("-ss", "1.3", "-i", str(made["h264.mp4"]), "-t", "3", "-c", "copy", str(made["trim.mp4"]))
+    return made
+
+
+def test_interlaced_video_measures_right(files: dict[str, Path]) -> None:
+    # OpenCV >= 4.13 decodes flagged-interlaced streams black; FFmpeg reads them instead
+    analysis = analyze(files["interlaced.mp4"], AnalysisConfig(fixation_px=None))
+    assert analysis.omega_rad_s == pytest.approx(0.6, rel=0.01)
+    assert analysis.omega_low_rad_s <= 0.6 <= analysis.omega_high_rad_s
+
+
+def test_frame_of_an_interlaced_video_is_a_picture(files: dict[str, Path], tmp_path: Path) -> None:
+    still = tmp_path / "still.png"
+    result = runner.invoke(app, ["frame", str(files["interlaced.mp4"]), "-o", str(still), "--at", "1"])
+    assert result.exit_code == 0, result.stderr
+    assert cv2.imread(str(still)).mean() > 20  # not black
+
+
+def test_interlaced_without_ffmpeg_is_measured_or_explained(files: dict[str, Path],
+                                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    # OpenCV decodes such a file black in some openings and not in others: either the run
+    # measures it, or it stops with one line that says what to do; never "no point could be tracked"
+    monkeypatch.setattr("rotrate_cli.pipe.ffmpeg_program", lambda: None)
+    result = runner.invoke(app, ["analyze", str(files["interlaced.mp4"]), *FIXATION, "-f", "json"])
+    if result.exit_code == 0:
+        assert '"omega": 0.6' in result.stdout or '"omega": 0.59' in result.stdout
+    else:
+        lines = [line for line in result.stderr.splitlines() if "error" in line]
+        assert result.exit_code == 2 and len(lines) == 1 and "interlaced" in lines[0]
+
+
+def test_every_frame_black_is_said(tmp_path: Path) -> None:
+    black = tmp_path / "black.avi"
+    writer = cv2.VideoWriter(str(black), cv2.VideoWriter_fourcc(*"MJPG"), 30, (160, 120))
+    for _ in range(40):
+        writer.write(np.zeros((120, 160, 3), np.uint8))
+    writer.release()
+    result = runner.invoke(app, ["analyze", str(black), "--fixation", "80,60"])
+    assert result.exit_code == 2 and "decode black" in result.stderr and "interlaced" in result.stderr
+
+
+def test_a_damaged_spot_is_read_past(files: dict[str, Path]) -> None:
+    # before: decoding stopped at the spot (55 of 150 frames) and warned "it may be cut off"
+    analysis = analyze(files["damaged.mp4"], AnalysisConfig(fixation_px=(319.5, 179.5)))
+    assert analysis.frames >= 140
+    assert analysis.omega_rad_s == pytest.approx(0.6, rel=0.01)
+    assert any("could not be decoded between" in warning for warning in analysis.warnings)
+    assert not any("cut off" in warning for warning in analysis.warnings)
+
+
+def test_an_mp4_without_its_index_is_called_truncated(files: dict[str, Path]) -> None:
+    result = runner.invoke(app, ["analyze", str(files["no_index.mp4"]), *FIXATION])
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.exit_code == 2 and len(lines) == 1
+    assert "damaged or truncated" in lines[0] and "is it a video file" not in lines[0]
+
+
+def test_an_mp4_cut_after_its_index_warns_and_measures(files: dict[str, Path]) -> None:
+    analysis = analyze(files["cut.mp4"], AnalysisConfig(fixation_px=(319.5, 179.5)))
+    assert analysis.omega_rad_s == pytest.approx(0.6, rel=0.02)
+    assert any("cut off or damaged" in warning for warning in analysis.warnings)
+
+
+def test_a_stream_copied_trim_is_not_called_cut_off(files: dict[str, Path]) -> None:
+    # it announces the frames from the key frame before its cut (101), and shows 92
+    analysis = analyze(files["trim.mp4"], AnalysisConfig(fixation_px=(319.5, 179.5)))
+    assert analysis.omega_rad_s == pytest.approx(0.6, rel=0.01)
+    assert not any("cut off" in warning or "could not be decoded" in warning for warning in analysis.warnings)
+
+
+def test_an_opencv_without_its_logging_module_still_decodes(monkeypatch: pytest.MonkeyPatch) -> None:
+    # OpenCV 4.9-4.12 have no cv2.utils.logging; the luma path used it on every frame
+    from rotrate_cli.decode import FrameSource
+
+    monkeypatch.setattr(cv2, "utils", object(), raising=False)
+    frames = list(FrameSource(BOX).frames(grey=True, end_s=0.5))
+    assert len(frames) == 16 and frames[0].image.ndim == 2
+
+
+def test_frozen_frames_from_opencv_are_read_again_through_ffmpeg(files: dict[str, Path],
+                                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    # some openings of an interlaced file give one garbled picture, over and over: as if
+    # OpenCV did so on every opening, the run reads the file again through FFmpeg
+    from rotrate_cli import decode
+
+    garbled = np.random.default_rng(0).integers(0, 255, (360, 640, 3), dtype=np.uint8)
+
+    def frozen(self, capture, start_s, end_s, convert, quiet=False):  # noqa: ANN001, ANN202
+        capture.release()
+        for index in range(150):
+            yield decode.Frame(index, index / 30.0, convert(garbled.copy()))
+
+    monkeypatch.setattr(decode.FrameSource, "_video_frames", frozen)
+    analysis = analyze(files["h264.mp4"], AnalysisConfig(fixation_px=(319.5, 179.5)))
+    assert analysis.omega_rad_s == pytest.approx(0.6, rel=0.01)
+    assert any("read through FFmpeg" in warning for warning in analysis.warnings)
