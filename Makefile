@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow test-floor lint bench bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov clean
+.PHONY: demo test test-slow test-floor lint bench bench-memory bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -39,9 +39,13 @@ test-floor: $(FLOOR)/.installed
 lint: $(STAMP)
 	$(BIN)/ruff check rotrate_cli tests benchmarks
 
-## bench: decode vs analyze speed on a 720p clip, and peak memory for a clip and one 4x as long
+## bench: analyze vs decode-only time at 720p and 1080p and on the real record clip, start-up, and peak memory for a clip and one 4x as long
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_speed.py
+
+## bench-memory: peak memory of --fixation auto on 640x480 clips of 1, 10 and 30 minutes (about 4 minutes)
+bench-memory: $(STAMP)
+	$(BIN)/python benchmarks/bench_speed.py --long
 
 ## bench-real: real footage with known truth (../shared/data), default settings: error, interval, coverage, sense
 bench-real: $(STAMP)

@@ -73,6 +73,7 @@ if mode == "decode":
     from rotrate_cli.decode import FrameSource
 else:
     from rotrate_cli.analysis import AnalysisConfig, analyze
+    import pandas, scipy.special  # loaded on first use in a run: here, so that the stages alone are timed
 imported = time.perf_counter()
 if mode == "decode":
     frames = sum(1 for _ in FrameSource(path).frames()); omega = None
@@ -128,10 +129,47 @@ def compare(path: Path, fixation: tuple[float, float] | None, rounds: int) -> di
     }
 
 
+def long_clips() -> int:
+    """Peak memory and time of ``analyze --fixation auto`` on 640x480 clips of 1, 10 and 30 minutes
+    (a rendered 4-s turn of a box, looped by stream copy: a real clip of that length). Target: the
+    30-minute clip under 500 MB, and growth under 5 MB a minute."""
+    from rotrate_cli.pipe import ffmpeg_program
+
+    program = ffmpeg_program()
+    if program is None:
+        print("skipped: no FFmpeg program to loop the clip (pip install imageio-ffmpeg)")
+        return 0
+    OUT.mkdir(exist_ok=True)
+    turn = OUT / "mem_480p_4s.mp4"
+    if not turn.exists():
+        subprocess.run([str(Path(sys.executable).parent / "rotrate"), "synth", str(turn), "--shape", "box",
+                        "--omega", str(OMEGA), "--duration", "4", "--size", "640x480"], check=True,
+                       capture_output=True)
+    peaks = {}
+    for minutes in (1, 10, 30):
+        clip = OUT / f"mem_480p_{minutes}min.mp4"
+        if not clip.exists():
+            subprocess.run([program, "-v", "error", "-y", "-stream_loop", str(minutes * 15 - 1), "-i", str(turn),
+                            "-c", "copy", str(clip)], check=True)
+        result = child("analyze", clip, None)
+        peaks[minutes] = result["peak_mib"]
+        error = 100 * (result["omega"] / OMEGA - 1)
+        print(f"{minutes:>3} min: peak {result['peak_mib']:6.0f} MiB, {result['whole_s']:6.1f} s, "
+              f"omega error {error:+.3f}%")
+    growth = (peaks[30] - peaks[1]) / 29
+    print(f"growth {growth:+.1f} MiB a minute from 1 to 30 minutes (target < 5); 30 minutes {peaks[30]:.0f} MiB "
+          "(target < 500)")
+    return 0 if growth < 5 and peaks[30] < 500 else 1
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=5, help="alternating rounds (medians are reported)")
+    parser.add_argument("--long", action="store_true",
+                        help="instead: peak memory of --fixation auto on 640x480 clips of 1, 10 and 30 minutes")
     args = parser.parse_args()
+    if args.long:
+        return long_clips()
     clips = make_clips()
     print("rotrate benchmark: side by side in one run, medians; ratio = analyze time / decode-only time")
     print(f"{'clip':<34} {'frames':>6} {'decode f/s':>10} {'analyze f/s':>11} {'ratio':>6} {'target':>6} "

@@ -65,6 +65,7 @@ from rotrate_cli.view import View, keep_for_view, rate_from_paths, view_from_pat
 
 #: Progress callback: (frames done, frames expected or None).
 ProgressCallback = Callable[[int, int | None], None]
+StageCallback = Callable[[str], None]
 
 
 DIRECTIONS = ("ccw", "cw", "unknown")
@@ -170,8 +171,12 @@ class Analysis:
         return sample_rates(self.offsets, self.features, self.method, self.rejection)
 
 
-def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None = None) -> Analysis:
+def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None = None,
+            stage: StageCallback | None = None) -> Analysis:
     """Measure the rotation rate of the object in a video or image sequence.
+
+    ``progress(frames_done, frames_expected)`` is called as frames are tracked; ``stage(text)``
+    when the run moves on from tracking to the fits (which take a while on long clips).
 
     Raises:
         InputError: bad source or options.
@@ -179,7 +184,7 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     """
     check_config(config)
     try:
-        return _analyze(source, config, progress)
+        return _analyze(source, config, progress, stage)
     except NoResultError as error:
         if (config.every or 1) > 1 and " short" in str(error):
             raise NoResultError(f"{error}; --every {config.every} keeps one frame in {config.every}, which leaves "
@@ -190,7 +195,8 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
         raise
 
 
-def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None) -> Analysis:
+def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None,
+             stage: StageCallback | None = None) -> Analysis:
     video = FrameSource(source, fps=config.fps,
                         times_s=None if config.times_s is None else np.asarray(config.times_s, dtype=np.float64))
     info = video.info
@@ -231,10 +237,12 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         run = _track(video, config, tracker, progress, thumbnails)
         count = run.frames
     if run.tracks.empty:
+        hint = ("if the video shows motion, it is probably interlaced (camcorder, broadcast, DV), which this OpenCV "
+                "cannot decode: deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4) or pip install 'rotrate[ffmpeg]'")
+        if thumbnails.black_fraction() >= LIFELESS:
+            raise InputError(f"the frames of {source} decode black: {hint}")
         if thumbnails.lifeless_fraction() >= LIFELESS:
-            raise InputError(f"the frames of {source} decode black or frozen: if the video shows motion, it is "
-                             "probably interlaced (camcorder, broadcast, DV), which this OpenCV cannot decode: "
-                             "deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4) or pip install 'rotrate[ffmpeg]'")
+            raise NoResultError(f"no point could be tracked: the picture does not change from frame to frame; {hint}")
         raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
     everything = _by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
@@ -265,6 +273,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
                 angle, elevation_found = shape.angle_deg, shape.elevation_deg
                 if config.elevation_deg is None:
                     config = replace(config, elevation_deg=elevation_found)
+    if stage is not None:
+        stage("fitting the tracks")
     # the decoder may have learnt something while it read (a stream OpenCV decodes black)
     warnings_early += [warning for warning in video.warnings if warning not in warnings_early]
     warnings = list(run.notes) + warnings_early

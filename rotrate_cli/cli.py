@@ -139,10 +139,13 @@ def _emit(analysis: Analysis, fmt: str, output: Path | None, force: bool) -> Non
 
 
 @contextmanager
-def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | None]:
+def _progress_bar(quiet: bool) -> Iterator[tuple[Callable[[int, int | None], None] | None,
+                                                 Callable[[str], None] | None]]:
+    """The frames' progress callback and the stage callback of :func:`rotrate_cli.analysis.analyze`
+    (None, None when quiet or not on a terminal)."""
     console = Console(stderr=True)
     if quiet or not console.is_terminal:
-        yield None
+        yield None, None
         return
     from rich.progress import (
         BarColumn,
@@ -163,15 +166,18 @@ def _progress_bar(quiet: bool) -> Iterator[Callable[[int, int | None], None] | N
             speed = task.finished_speed or task.speed
             return Text("" if speed is None else f"{speed:.0f} frames/s")
 
-    columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), RateColumn(), TimeElapsedColumn(),
-               TimeRemainingColumn())
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), RateColumn(),
+               TimeElapsedColumn(), TimeRemainingColumn())
     with Progress(*columns, console=console, transient=True) as progress:
         task = progress.add_task("frames", total=None)
 
         def update(done: int, total: int | None) -> None:
             progress.update(task, completed=done, total=total)
 
-        yield update
+        def stage(text: str) -> None:  # the bar pulses: the fits' length is not known ahead
+            progress.update(task, description=text, total=None)
+
+        yield update, stage
 
 
 @app.command("analyze")
@@ -337,8 +343,8 @@ def analyze_command(
             raise InputError("--scheduler is for several inputs (a batch); with one, drop it")
         if output_dir is not None:
             raise InputError("--output-dir is for several inputs; with one, use --output")
-        with _progress_bar(quiet) as progress:
-            analysis = analyze(sources[0], config, progress)
+        with _progress_bar(quiet) as (progress, stage):
+            analysis = analyze(sources[0], config, progress, stage)
         # the files first, the report on stdout last: a reader that stops early (| head) costs no file
         if series_csv_path is not None:
             write_text(series_csv_path, series_csv(analysis), force)

@@ -478,7 +478,8 @@ class FrameSource:
         expected = self.info.frame_count
         if self._files is not None or not expected or decoded == 0:
             return None
-        duration_s = _mp4_duration_s(Path(self._source))
+        # with --fps or --times the frames' times are not the file's, so its duration says nothing
+        duration_s = None if self.info.fps_overridden else _mp4_duration_s(Path(self._source))
         step_s = 1.0 / self.info.fps
         if duration_s is not None and math.isfinite(last_time_s):
             if last_time_s + step_s >= duration_s - 2.0 * step_s:

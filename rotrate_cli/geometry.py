@@ -156,6 +156,8 @@ def measure_body(
     result, camera = measure(fixation)
     release_free_memory()
     if config.fixation_px is None and config.method == "fit":
+        # the axis is refined even where the clip's repetition gives the rate: the sense of
+        # turning is the tracks' (without it, one EPFL car's sense came out wrong)
         fixation, result, camera = _refine_fixation(result, camera, fixation, angle, measure)
         change = None if steady else half_rates(result, config, camera)
         if change is not None and changes(result.combined, *change):

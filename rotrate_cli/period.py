@@ -134,6 +134,10 @@ class Thumbnails:
         self._images.append(np.asarray(small, dtype=np.uint8).ravel())
         self._times.append(float(time_s))
 
+    def black_fraction(self) -> float:
+        """The fraction of the frames seen whose thumbnail is all black (0 when none were seen)."""
+        return sum(not image.any() for image in self._images) / len(self._images) if self._images else 0.0
+
     def lifeless_fraction(self) -> float:
         """The fraction of the frames seen whose thumbnail is all black or the same, pixel for
         pixel, as the frame before (0 when none were seen): what a decoder gives that hands back

@@ -125,6 +125,11 @@ def tracking_image(
 
 #: Samples per block of the tracker's store (see :class:`_Tracks`).
 _BLOCK_SAMPLES = 1 << 15
+#: Samples the tracker's store holds at most (24 bytes each in the tracks table, and a few times
+#: that in the fits): past it, every other track is let go, and from then on (see
+#: :meth:`_Tracks._thin`). Four minutes of 300 points at 30 frames/s; a 10-minute 640x480 clip
+#: peaked at 767 MB with every track kept.
+MAX_STORED_SAMPLES = 1_500_000
 
 
 class _Tracks:
@@ -134,18 +139,30 @@ class _Tracks:
     operating system when freed, where many small arrays would stay in the process's heap. So
     at the end of a long clip the store and the table it becomes are not both resident."""
 
-    def __init__(self) -> None:
+    def __init__(self, max_samples: int = MAX_STORED_SAMPLES) -> None:
         self.frame_index: list[int] = []
         self.frame_time_s: list[float] = []
         self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # ids, frame slots, points
         self._fill = _BLOCK_SAMPLES  # samples used in the last block (full: start a new one)
+        self._max = max_samples
+        self._stored = 0
+        #: only tracks whose id is a multiple of this are kept (doubled each time the store fills)
+        self.keep_every = 1
 
     def add(self, frame: int, time_s: float, ids: np.ndarray, points: np.ndarray) -> None:
+        if self.keep_every > 1:
+            kept = ids % self.keep_every == 0
+            ids, points = ids[kept], points[kept]
         if len(ids) == 0:
             return
         slot = len(self.frame_index)
         self.frame_index.append(frame)
         self.frame_time_s.append(time_s)
+        self._append(ids, np.full(len(ids), slot, np.int32), points)
+        if self._stored > self._max:
+            self._thin()
+
+    def _append(self, ids: np.ndarray, slots: np.ndarray, points: np.ndarray) -> None:
         start = 0
         while start < len(ids):
             if self._fill == _BLOCK_SAMPLES:
@@ -156,10 +173,21 @@ class _Tracks:
             take = min(len(ids) - start, _BLOCK_SAMPLES - self._fill)
             end = self._fill + take
             block_ids[self._fill:end] = ids[start:start + take]
-            block_slots[self._fill:end] = slot
+            block_slots[self._fill:end] = slots[start:start + take]
             block_points[self._fill:end] = points[start:start + take]
             self._fill = end
             start += take
+        self._stored += len(ids)
+
+    def _thin(self) -> None:
+        """Keep every other track of those kept so far (by id: evenly over the clip), and from now
+        on: a long clip's store, and all that is computed from it, stays bounded."""
+        self.keep_every *= 2
+        blocks, filled = self._blocks, [self._filled(i) for i in range(len(self._blocks))]
+        self._blocks, self._fill, self._stored = [], _BLOCK_SAMPLES, 0
+        for (ids, slots, points), count in zip(blocks, filled, strict=True):
+            kept = ids[:count] % self.keep_every == 0
+            self._append(ids[:count][kept], slots[:count][kept], points[:count][kept])
 
     def _filled(self, index: int) -> int:
         return self._fill if index == len(self._blocks) - 1 else _BLOCK_SAMPLES
@@ -383,11 +411,11 @@ class CornerTracker:
         )
         if corners is None:
             return
+        # No sub-pixel refinement of the corners: a track is whatever point its window starts on,
+        # and Lucas-Kanade follows that point to a fraction of a pixel from there; where within
+        # a pixel it starts changes nothing of its motion (cornerSubPix was a tenth of the
+        # record clip's tracking time).
         corners = corners.reshape(-1, 2).astype(np.float32) + np.float32([left, top])
-        corners = cv2.cornerSubPix(
-            grey, corners.reshape(-1, 1, 2), (3, 3), (-1, -1),
-            (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03),
-        ).reshape(-1, 2)
         new_ids = np.arange(self._next_id, self._next_id + len(corners), dtype=np.int32)
         self._next_id += len(corners)
         usable = self._seeded(grey, corners, new_ids)
@@ -403,6 +431,11 @@ class CornerTracker:
 
         Call once, at the end: the store is handed over, not copied."""
         return self._store.frame(self.scale)
+
+    @property
+    def kept_one_in(self) -> int:
+        """1, or on a long clip the N of "one track in N kept" (see :data:`MAX_STORED_SAMPLES`)."""
+        return self._store.keep_every
 
 
 class KltTracker(CornerTracker):
@@ -490,4 +523,8 @@ def track_frames(
         count += 1
         if progress is not None:
             progress(count, frame.time_s)
-    return TrackingRun(tracker.tracks(), count, first_time_s, last_time_s)
+    notes: tuple[str, ...] = ()
+    if tracker.kept_one_in > 1:
+        notes = (f"a long clip: one track in {tracker.kept_one_in} is kept for the fits, evenly over the clip, "
+                 "to bound memory",)
+    return TrackingRun(tracker.tracks(), count, first_time_s, last_time_s, notes)

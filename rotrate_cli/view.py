@@ -43,8 +43,8 @@ MAX_SPREAD = 4.0
 MIN_TRACKS = 10
 #: Tracks kept for the view when the rest of the tracks table is let go: the longest, each
 #: thinned to at most this many samples (a 30-minute clip's tracks need not stay in memory).
-KEEP_TRACKS = 3000
-KEEP_SAMPLES = 48
+KEEP_TRACKS = 1000
+KEEP_SAMPLES = 32
 
 
 @dataclass(frozen=True)

@@ -84,3 +84,20 @@ def test_store_spanning_many_blocks_gives_the_tidy_table(monkeypatch: pytest.Mon
     assert len(got) == len(expected)
     for (k, f, t, x, y), (k2, f2, t2, x2, y2) in zip(got, expected, strict=True):
         assert (k, f, t) == (k2, f2, t2) and x == pytest.approx(x2, rel=1e-6) and y == pytest.approx(y2, rel=1e-6)
+
+
+def test_a_long_clips_store_keeps_every_other_track_once_full() -> None:
+    """Memory stays bounded on a long clip: past the cap, the store keeps the tracks whose id is a
+    multiple of 2, then 4..., evenly over the clip, old and new alike."""
+    from rotrate_cli.tracking import _Tracks
+
+    store = _Tracks(max_samples=1000)
+    for frame in range(100):  # 20 live tracks a frame, each lasting 10 frames
+        ids = np.arange(20, dtype=np.int32) + 2 * (frame // 10) * 10
+        store.add(frame, frame / 30.0, ids, np.column_stack([ids, np.full(20, frame)]).astype(np.float32))
+    assert store.keep_every == 2  # 2000 samples offered, 1000 the cap
+    table = store.frame(1.0)
+    assert (table["track"] % 2 == 0).all() and len(table) == 1000
+    assert table["frame"].min() == 0 and table["frame"].max() == 99  # the whole clip, not its start
+    first = table[table["track"] == 0]
+    assert list(first["frame"]) == list(range(10)) and (first["x_px"] == 0).all()
