@@ -50,6 +50,7 @@ from rotrate_cli.outliers import (
     RejectionConfig,
 )
 from rotrate_cli.period import Period, Thumbnails, find_period
+from rotrate_cli.reasons import name_rejections, track_places
 from rotrate_cli.segment import Body, segment_tracks, unresolved
 from rotrate_cli.series import rate_series
 from rotrate_cli.tracking import (
@@ -304,12 +305,13 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     period = _repetition(thumbnails, config, info.clock_resolution_s)
     thumbnails.clear()
     view_tracks = keep_for_view(everything)  # the view is read at the rate reported, once it is known
+    places = track_places(everything)  # where each track lies: to name why the rejected were
     try:
         body = prepare_body(everything, angle, config)
     except NoResultError:
         if period is None:
             raise
-        return _with_view(_repetition_only(period, config, warnings, kept, context), view_tracks, config)
+        return _with_view(_repetition_only(period, config, warnings, kept, context), view_tracks, config, size_px)
     focal = None
     # the lens is sought only where the tracks' rate is what is reported: a clip that repeats is
     # measured by its repetition, which needs no model of the camera (and the search costs
@@ -325,10 +327,13 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     release_free_memory()
     fixation, result, camera = measure_body(body, angle, config, size_px, steady=period is not None)
     del body
+    result = replace(result, features=name_rejections(result.features, places, fixation, angle,
+                                                      result.combined.omega_rad_s, result.offsets))
     if focal is not None and math.isfinite(focal.focal_px) and result.combined.tracks_used > 0:
         result = with_lens_doubt(result, focal, fixation, angle, config, size_px)
     if result.combined.tracks_used == 0 and period is not None:
-        return _with_view(_repetition_only(period, config, warnings, kept, context, result), view_tracks, config)
+        return _with_view(_repetition_only(period, config, warnings, kept, context, result), view_tracks, config,
+                          size_px)
     doubts: tuple[str, ...] = ()
     if config.fixation_px is not None and period is None:  # the repetition's rate needs no axis
         doubt = fixation_doubt(result, camera, fixation, angle, config, size_px)
@@ -349,7 +354,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     analysis = _result(result, fixation_px=(float(fixation[0]), float(fixation[1])),
                        method=method_name(config, camera), warnings=tuple(warnings), series=series, tracks=kept,
                        focal=focal, period=period, doubts=doubts, **context)
-    return _with_view(analysis, view_tracks, config)
+    return _with_view(analysis, view_tracks, config, size_px)
 
 
 def _with_paths_rate(result: RateResult, view_tracks: pd.DataFrame) -> tuple[RateResult, str | None]:
@@ -373,12 +378,13 @@ def _with_paths_rate(result: RateResult, view_tracks: pd.DataFrame) -> tuple[Rat
     return replace(result, combined=widened), note
 
 
-def _with_view(analysis: Analysis, view_tracks: pd.DataFrame, config: AnalysisConfig) -> Analysis:
+def _with_view(analysis: Analysis, view_tracks: pd.DataFrame, config: AnalysisConfig,
+               size_px: tuple[int, int]) -> Analysis:
     """The analysis with the view read from the tracks' paths at its reported rate
     (:mod:`rotrate_cli.view`). Where the rate is the clip's repetition and the fixation was to
     be found, the found fixation is the paths' turning centre: the tracks' own axis search
     assumes a side view (on the record clip it put the spindle 380 px off; the paths' centre is
-    18 px off)."""
+    25 px off, and 37 px off where the picture is cropped to leave the spindle outside it)."""
     view = view_from_paths(view_tracks, analysis.omega_rad_s)
     if view is None:
         return analysis
@@ -387,6 +393,10 @@ def _with_view(analysis: Analysis, view_tracks: pd.DataFrame, config: AnalysisCo
         changes["elevation_deg"] = view.elevation_deg
     if config.fixation_px is None and analysis.rate_from == "repetition":
         changes["fixation_px"] = view.centre_px
+        x, y = view.centre_px
+        if not (0 <= x <= size_px[0] - 1 and 0 <= y <= size_px[1] - 1):
+            changes["warnings"] = (*analysis.warnings, f"the axis found, ({x:.0f}, {y:.0f}), lies outside the "
+                                   f"{size_px[0]}x{size_px[1]} frame")
     return replace(analysis, **changes)
 
 

@@ -411,8 +411,10 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
     features = analysis.features
     inliers = set(features.loc[features["inlier"], "track"].astype(int))
     assert analysis.tracks is not None  # noqa: S101 - asked for with keep_tracks
+    named = {int(track): str(reason) for track, reason in zip(features["track"], features["reason"], strict=True)
+             if reason in ("reflection", "slides", "other_motion")}
     write_overlay(FrameSource(source, fps=fps, times_s=times_s), path, analysis.tracks, inliers, analysis.fixation_px,
-                  analysis.axis_angle_deg, at, start, end, force)
+                  analysis.axis_angle_deg, at, start, end, force, named)
 
 
 def _wide_console() -> Console:

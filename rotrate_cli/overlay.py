@@ -24,6 +24,8 @@ from rotrate_cli.outputs import replacing
 AXIS_COLOUR = (0, 215, 255)
 INLIER_COLOUR = (80, 220, 80)
 REJECTED_COLOUR = (60, 60, 235)
+#: Rejected tracks named by where they are (see :mod:`rotrate_cli.reasons`), in their own colours.
+NAMED_COLOURS = {"reflection": (255, 255, 0), "slides": (0, 165, 255), "other_motion": (255, 0, 255)}
 GRID_COLOUR = (255, 255, 255)
 TEXT_COLOUR = (255, 255, 255)
 #: Seconds of each track's path drawn behind its point.
@@ -103,10 +105,12 @@ def write_overlay(
     start_s: float = 0.0,
     end_s: float | None = None,
     force: bool = False,
+    named: dict[int, str] | None = None,
 ) -> int:
     """Write the overlay video: each frame of ``source`` between ``start_s`` and ``end_s`` with
-    the axis, each track's last :data:`TRAIL_S` of path (inliers green, rejected red, with a
-    legend), and the running omega ``running(time_s) -> (omega, low, high)`` written on it.
+    the axis, each track's last :data:`TRAIL_S` of path (inliers green, rejected red, those
+    ``named`` reflection, slides or other_motion in :data:`NAMED_COLOURS`, with a legend), and
+    the running omega ``running(time_s) -> (omega, low, high)`` written on it.
 
     ``tracks`` has ``track, frame, x_px, y_px`` (features numbered as in the report). Returns
     the number of frames written.
@@ -118,7 +122,8 @@ def write_overlay(
         if not writer.isOpened():
             raise OutputError(f"could not open a video writer for {path}; use a .mp4 or .avi name")
         try:
-            return _draw_frames(source, writer, tracks, inliers, point_px, angle_deg, running, start_s, end_s)
+            return _draw_frames(source, writer, tracks, inliers, point_px, angle_deg, running, start_s, end_s,
+                                named or {})
         finally:
             writer.release()
 
@@ -126,7 +131,7 @@ def write_overlay(
 def _draw_frames(
     source: FrameSource, writer: cv2.VideoWriter, tracks: pd.DataFrame, inliers: set[int],
     point_px: tuple[float, float], angle_deg: float, running: Callable[[float], tuple[float, float, float]],
-    start_s: float, end_s: float | None,
+    start_s: float, end_s: float | None, named: dict[int, str],
 ) -> int:
     """Draw and write the overlay's frames (see :func:`write_overlay`); returns how many."""
     info = source.info
@@ -150,7 +155,8 @@ def _draw_frames(
                 continue
             if trail[-1][0] < frame.time_s - 1e-9:
                 continue  # the track has ended: its trail is no longer drawn
-            colour = INLIER_COLOUR if track in inliers else REJECTED_COLOUR
+            colour = (INLIER_COLOUR if track in inliers
+                      else NAMED_COLOURS.get(named.get(track, ""), REJECTED_COLOUR))
             points = np.array([(x, y) for _, x, y in trail], np.int32)
             if len(points) > 1:
                 cv2.polylines(image, [points], False, colour, 1, cv2.LINE_AA)
@@ -161,16 +167,18 @@ def _draw_frames(
         # on a dark band: the codec then keeps the changing text sharp
         cv2.rectangle(image, (0, 0), (image.shape[1] - 1, int(42 * scale)), (0, 0, 0), -1)
         _label(image, text, (10, int(30 * scale)), scale)
-        _legend(image, scale)
+        _legend(image, scale, sorted(set(named.values()) & set(NAMED_COLOURS)))
         writer.write(image)
         written += 1
     return written
 
 
-def _legend(image: np.ndarray, scale: float) -> None:
+def _legend(image: np.ndarray, scale: float, names: list[str]) -> None:
     height = image.shape[0]
     y = height - int(12 * scale / 0.45)
-    for colour, text in ((INLIER_COLOUR, "used"), (REJECTED_COLOUR, "rejected"), (AXIS_COLOUR, "axis")):
+    entries = [(INLIER_COLOUR, "used"), *((NAMED_COLOURS[name], name.replace("_", " ")) for name in names),
+               (REJECTED_COLOUR, "rejected"), (AXIS_COLOUR, "axis")]
+    for colour, text in entries:
         cv2.circle(image, (14, y - 4), 5, colour, -1)
         _label(image, text, (24, y), scale)
         y -= int(22 * scale / 0.45)

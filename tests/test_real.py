@@ -8,6 +8,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from rotrate_cli.analysis import AnalysisConfig, analyze
@@ -73,3 +74,29 @@ def test_real_cases_are_never_confidently_wrong() -> None:
     error = abs(analysis.omega_rad_s / 0.17453292519943295 - 1)
     assert error <= 0.01
     assert analysis.rate_from == "repetition"
+
+
+def test_record_whose_spindle_is_outside_the_picture(tmp_path: Path) -> None:
+    """The record clip's first 8 s cropped 1000 px wide: its spindle (x 1093) lies outside the
+    frame. The rate still comes from the repetition, and --fixation auto puts the axis where the
+    label's paths turn, outside the frame (it used to be put 28,000 px away)."""
+    import cv2
+
+    clip = VIDEOS / "record_oblique_closeup.mp4"
+    need(clip, "the record video")
+    truth = json.loads(clip.with_suffix(".truth.json").read_text())
+    cropped = tmp_path / "record_cropped.avi"
+    capture = cv2.VideoCapture(str(clip))
+    writer = cv2.VideoWriter(str(cropped), cv2.VideoWriter_fourcc(*"MJPG"), capture.get(cv2.CAP_PROP_FPS), (1000, 720))
+    for _ in range(192):  # 8 s: 4.5 turns
+        ok, frame = capture.read()
+        if not ok:
+            break
+        writer.write(np.ascontiguousarray(frame[:, :1000]))
+    writer.release()
+    capture.release()
+    analysis = analyze(cropped, AnalysisConfig(fixation_px=None))
+    assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.01)
+    assert analysis.fixation_px[0] > 1000  # outside the picture
+    assert math.dist(analysis.fixation_px, truth["fixation"]) < 60
+    assert any("lies outside the 1000x720 frame" in warning for warning in analysis.warnings)
