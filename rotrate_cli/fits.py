@@ -16,6 +16,7 @@ from rotrate_cli.joint import joint_fit
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import (
+    FEATURE_COLUMNS,
     Combined,
     RejectionConfig,
     combine,
@@ -124,12 +125,41 @@ def rates_from_offsets(
         _, features = judge_paper(rates.paper_samples(offsets))
         combined = combine_plain(features.loc[features["inlier"], "omega_rad_s"].to_numpy())
     else:
-        features = judge_fits(offsets, rates.fit_tracks(offsets, rejection.min_samples, camera), rejection)
+        long_enough, short = _split_short(offsets, max(rejection.min_samples, 4))
+        features = judge_fits(long_enough, rates.fit_tracks(long_enough, rejection.min_samples, camera), rejection)
+        if short is not None:
+            features = pd.concat([features, short], ignore_index=True).sort_values("track", kind="stable")
+            features = features.reset_index(drop=True)
         release_free_memory()  # the per-track fits' padded batches are gone
         used = features[features["inlier"]]
         combined = combine(used["omega_rad_s"].to_numpy(), used["omega_se_rad_s"].to_numpy())
         combined = _joint(offsets, used, combined, rejection, camera)
     return RateResult(offsets, features, combined, _direction(offsets, features))
+
+
+def _split_short(offsets: pd.DataFrame, min_samples: int) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+    """The offsets of the tracks long enough to fit, and the feature rows of the others (reason
+    ``short``), made at once: on the record clip 43,000 of 45,000 tracks are a few frames long,
+    and fitting and judging them one by one took a fifth of its fits' time. None when there are
+    none."""
+    track = offsets["track"].to_numpy()
+    if len(track) == 0:
+        return offsets, None
+    starts = np.flatnonzero(np.r_[True, track[1:] != track[:-1]])
+    counts = np.diff(np.r_[starts, len(track)])
+    short = counts < min_samples
+    if not short.any():
+        return offsets, None
+    offset = offsets["offset_px"].to_numpy(dtype=np.float64)
+    spread = np.maximum.reduceat(offset, starts) - np.minimum.reduceat(offset, starts)
+    nan = np.full(int(short.sum()), math.nan)
+    rows = pd.DataFrame({
+        "track": track[starts[short]].astype(int), "samples": counts[short].astype(int),
+        "omega_rad_s": nan, "omega_se_rad_s": nan, "rms_residual": nan, "amplitude": nan, "arc_rad": nan,
+        "sense": nan, "range": spread[short], "inlier": False, "reason": "short",
+    })[list(FEATURE_COLUMNS)]
+    keep = np.repeat(~short, counts)
+    return offsets[keep].reset_index(drop=True), rows
 
 
 def _joint(
