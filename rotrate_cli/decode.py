@@ -22,6 +22,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from rotrate_cli.container import mp4_damage, mp4_duration_s
 from rotrate_cli.errors import InputError
 
 IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm"})
@@ -362,7 +363,7 @@ class FrameSource:
         capture = cv2.VideoCapture(self._source, cv2.CAP_FFMPEG)
         if not capture.isOpened():
             capture.release()
-            damage = _mp4_damage(Path(self._source))
+            damage = mp4_damage(Path(self._source))
             if damage is not None:
                 raise InputError(f"{self._source} is a damaged or truncated {damage}; it cannot be read (was the "
                                  "recording cut off? a tool such as untrunc can rebuild the index from a good file "
@@ -479,7 +480,7 @@ class FrameSource:
         if self._files is not None or not expected or decoded == 0:
             return None
         # with --fps or --times the frames' times are not the file's, so its duration says nothing
-        duration_s = None if self.info.fps_overridden else _mp4_duration_s(Path(self._source))
+        duration_s = None if self.info.fps_overridden else mp4_duration_s(Path(self._source))
         step_s = 1.0 / self.info.fps
         if duration_s is not None and math.isfinite(last_time_s):
             if last_time_s + step_s >= duration_s - 2.0 * step_s:
@@ -585,74 +586,6 @@ class FrameSource:
         if not math.isfinite(stamp_ms) or stamp_ms < 0 or (index > 0 and stamp_ms / 1000.0 <= last_time_s):
             return fallback
         return stamp_ms / 1000.0
-
-
-def _mp4_boxes(path: Path) -> list[tuple[bytes, int, int, bool]] | None:
-    """The top-level boxes of an MP4/MOV/3GP file as ``(type, offset, length, whole)``, or None
-    when the file does not start with an ``ftyp`` box."""
-    try:
-        size = path.stat().st_size
-        boxes = []
-        with path.open("rb") as file:
-            offset = 0
-            while offset + 8 <= size and len(boxes) < 64:
-                file.seek(offset)
-                header = file.read(16)
-                length, kind = int.from_bytes(header[:4], "big"), header[4:8]
-                if length == 1 and len(header) >= 16:
-                    length = int.from_bytes(header[8:16], "big")
-                elif length == 0:
-                    length = size - offset
-                if length < 8 or not kind.isalnum():
-                    break
-                boxes.append((kind, offset, length, offset + length <= size))
-                offset += length
-    except OSError:
-        return None
-    return boxes if boxes and boxes[0][0] == b"ftyp" else None
-
-
-def _mp4_duration_s(path: Path) -> float | None:
-    """An MP4/MOV's duration from its movie header (``moov/mvhd``), seconds; None where there
-    is none to read."""
-    boxes = _mp4_boxes(path)
-    moov = next(((offset, length) for kind, offset, length, whole in boxes or [] if kind == b"moov" and whole), None)
-    if moov is None:
-        return None
-    try:
-        with path.open("rb") as file:
-            file.seek(moov[0] + 8)
-            inner = file.read(min(moov[1] - 8, 1 << 20))
-    except OSError:
-        return None
-    at = 0
-    while at + 8 <= len(inner):
-        length, kind = int.from_bytes(inner[at:at + 4], "big"), inner[at + 4:at + 8]
-        if kind == b"mvhd" and at + 32 <= len(inner):
-            version = inner[at + 8]
-            body = inner[at + 12:]
-            if version == 1:
-                timescale, duration = int.from_bytes(body[16:20], "big"), int.from_bytes(body[20:28], "big")
-            else:
-                timescale, duration = int.from_bytes(body[8:12], "big"), int.from_bytes(body[12:16], "big")
-            return duration / timescale if timescale > 0 and duration > 0 else None
-        if length < 8:
-            return None
-        at += length
-    return None
-
-
-def _mp4_damage(path: Path) -> str | None:
-    """What is wrong with a file that looks like an MP4/MOV/3GP but cannot be opened: its index
-    (the ``moov`` box) missing or cut, as when a recording stops before the camera writes it;
-    None when it does not look like one, or looks whole."""
-    boxes = _mp4_boxes(path)
-    if boxes is None:
-        return None
-    moov = [whole for kind, _, _, whole in boxes if kind == b"moov"]
-    if moov and all(moov):
-        return None
-    return "MP4/MOV file: its index (the 'moov' box) is " + ("cut short" if moov else "missing")
 
 
 def _mean_rate(times_s: np.ndarray) -> float:
