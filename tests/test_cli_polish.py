@@ -98,3 +98,22 @@ def test_the_command_line_starts_without_the_heavy_libraries() -> None:
             "print(','.join(m for m in ('cv2', 'pandas', 'scipy', 'numpy') if m in sys.modules))")
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert loaded == ""
+
+
+def test_the_floor_job_pins_the_declared_floors() -> None:
+    """make test-floor installs constraints/floor.txt: it must pin exactly the lowest versions
+    pyproject.toml declares, so the floor that is tested is the floor that is promised."""
+    import re
+    import tomllib
+
+    root = Path(__file__).resolve().parents[1]
+    declared = {}
+    for requirement in tomllib.loads((root / "pyproject.toml").read_text())["project"]["dependencies"]:
+        name, floor = re.fullmatch(r"([A-Za-z0-9_.-]+)>=([0-9.]+)", requirement.replace(" ", "")).groups()
+        declared[name.lower()] = floor
+    pinned = dict(line.split("==") for line in (root / "constraints" / "floor.txt").read_text().splitlines()
+                  if line and not line.startswith("#"))
+    pinned = {name.lower(): version for name, version in pinned.items()}
+    for name, floor in declared.items():
+        assert name in pinned, f"{name} is not pinned in constraints/floor.txt"
+        assert pinned[name].startswith(floor), f"{name}: declared >={floor}, tested {pinned[name]}"
