@@ -28,6 +28,7 @@ import numpy as np
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.ragged import Ragged
 from rotrate_cli.rates import Camera, solve_two_columns
+from rotrate_cli.view import fit_ellipses
 
 #: Triples needed for a regression at one lag, and the largest rotation per lag used (rad):
 #: beyond it the regression's slope saturates.
@@ -230,27 +231,11 @@ def path_shape(tracks: pd.DataFrame, omega_rad_s: float, min_turn_rad: float = 0
     """
     if not (math.isfinite(omega_rad_s) and omega_rad_s > 0):
         return None
-    track = tracks["track"].to_numpy()
-    starts = np.flatnonzero(np.r_[True, track[1:] != track[:-1]])
-    counts = np.diff(np.r_[starts, len(track)])
-    time_s = tracks["time_s"].to_numpy(dtype=np.float64)
-    first, last = time_s[starts], time_s[starts + counts - 1]
-    mean_t = np.add.reduceat(time_s, starts) / counts
-    centred = time_s - np.repeat(mean_t, counts)
-    c, s = np.cos(omega_rad_s * centred), np.sin(omega_rad_s * centred)
-    columns = (np.ones_like(c), c, s)
-    normal = np.empty((len(starts), 3, 3))
-    for i in range(3):
-        for j in range(i, 3):
-            normal[:, i, j] = normal[:, j, i] = np.add.reduceat(columns[i] * columns[j], starts)
-    xy = tracks[["x_px", "y_px"]].to_numpy(dtype=np.float64)
-    right = np.stack([np.stack([np.add.reduceat(col * xy[:, k], starts) for col in columns], axis=1)
-                      for k in range(2)], axis=2)  # tracks x 3 x 2
-    usable = (counts >= 8) & (omega_rad_s * (last - first) >= min_turn_rad)
-    usable &= np.abs(np.linalg.det(normal)) > 1e-9 * np.maximum(counts, 1) ** 3
+    fit = fit_ellipses(tracks, omega_rad_s, min_turn_rad)
+    usable = fit.usable
     if int(usable.sum()) < min_tracks:
         return None
-    coef = np.linalg.solve(normal[usable], right[usable])  # tracks x (1, cos, sin) x (x, y)
+    coef = fit.coef[usable]  # tracks x (1, cos, sin) x (x, y)
     a, b = coef[:, 1, :], coef[:, 2, :]
     shape = a[:, :, None] * a[:, None, :] + b[:, :, None] * b[:, None, :]
     values, vectors = np.linalg.eigh(shape)

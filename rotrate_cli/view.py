@@ -94,8 +94,11 @@ def keep_for_view(tracks: pd.DataFrame) -> pd.DataFrame:
 
 
 @dataclass(frozen=True)
-class _Ellipses:
-    """Every track's path fitted at one rate: ``c + A cos(wt) + B sin(wt)`` per coordinate."""
+class Ellipses:
+    """Every track's path fitted at one rate: ``c + A cos(wt) + B sin(wt)`` per coordinate
+    (``coef``: tracks x (1, cos, sin) x (x, y), zero where not ``usable``: too few samples, too
+    little of a turn, or a singular fit), with each track's rms misfit, turn, the motion seen
+    (the larger of its x and y ranges) and its sample count."""
 
     coef: np.ndarray  # tracks x (1, cos, sin) x (x, y)
     misfit_px: np.ndarray
@@ -105,7 +108,9 @@ class _Ellipses:
     counts: np.ndarray
 
 
-def _ellipses(tracks: pd.DataFrame, omega: float) -> _Ellipses:
+def fit_ellipses(tracks: pd.DataFrame, omega: float, min_turn_rad: float = MIN_TURN_RAD) -> Ellipses:
+    """Each track's path at the rate ``omega`` (see :class:`Ellipses`), by linear least squares;
+    ``tracks``: ``track, time_s, x_px, y_px`` sorted by track then time."""
     track = tracks["track"].to_numpy()
     starts = np.flatnonzero(np.r_[True, track[1:] != track[:-1]])
     counts = np.diff(np.r_[starts, len(track)])
@@ -121,7 +126,7 @@ def _ellipses(tracks: pd.DataFrame, omega: float) -> _Ellipses:
     xy = tracks[["x_px", "y_px"]].to_numpy(dtype=np.float64)
     right = np.stack([np.stack([np.add.reduceat(col * xy[:, k], starts) for col in columns], axis=1)
                       for k in range(2)], axis=2)
-    usable = (counts >= MIN_SAMPLES) & (turn >= MIN_TURN_RAD)
+    usable = (counts >= MIN_SAMPLES) & (turn >= min_turn_rad)
     usable &= np.abs(np.linalg.det(normal)) > 1e-9 * np.maximum(counts, 1) ** 3
     coef = np.zeros((len(starts), 3, 2))
     if usable.any():
@@ -132,10 +137,10 @@ def _ellipses(tracks: pd.DataFrame, omega: float) -> _Ellipses:
     # be large and cancel its own centre
     seen = np.maximum(np.maximum.reduceat(xy[:, 0], starts) - np.minimum.reduceat(xy[:, 0], starts),
                       np.maximum.reduceat(xy[:, 1], starts) - np.minimum.reduceat(xy[:, 1], starts))
-    return _Ellipses(coef, misfit, usable, turn, seen, counts)
+    return Ellipses(coef, misfit, usable, turn, seen, counts)
 
 
-def _passing(fit: _Ellipses) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _passing(fit: Ellipses) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Which tracks follow a turning path closely (see the module's notes), and every track's
     path's long and short semi-axes and long axis's direction (radians)."""
     a, b = fit.coef[:, 1, :], fit.coef[:, 2, :]
@@ -158,7 +163,7 @@ def view_from_paths(tracks: pd.DataFrame, omega_rad_s: float) -> View | None:
     omega = abs(omega_rad_s)
     if not (math.isfinite(omega) and omega > 0) or tracks.empty:
         return None
-    fit = _ellipses(tracks, omega)
+    fit = fit_ellipses(tracks, omega)
     passing, major, minor, direction = _passing(fit)
     if int(passing.sum()) < MIN_TRACKS:
         return None
@@ -222,7 +227,7 @@ def _rate_in_view(tracks: pd.DataFrame, omega: float) -> float:
     view = view_from_paths(tracks, omega)
     if view is None:
         return math.nan  # the paths that pass do not tell one view: they are no body's turn
-    passing, major, _, _ = _passing(_ellipses(tracks, omega))
+    passing, major, _, _ = _passing(fit_ellipses(tracks, omega))
     # small paths say little of the rate: points near the axis, and slides along a rim
     passing &= major >= SMALL_PATH * view.path_px
     track = tracks["track"].to_numpy()
