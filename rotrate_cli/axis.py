@@ -28,6 +28,7 @@ import numpy as np
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.ragged import Ragged
 from rotrate_cli.rates import Camera, solve_two_columns
+from rotrate_cli.stats import weighted_median
 from rotrate_cli.view import fit_ellipses
 
 #: Triples needed for a regression at one lag, and the largest rotation per lag used (rad):
@@ -247,17 +248,12 @@ def path_shape(tracks: pd.DataFrame, omega_rad_s: float, min_turn_rad: float = 0
     doubled = np.radians(2 * angle)
     centre = math.degrees(math.atan2(float(weight @ np.sin(doubled)), float(weight @ np.cos(doubled)))) / 2
     angle = (angle - centre + 90.0) % 180.0 - 90.0 + centre
-    median = _weighted_median(angle, weight)
+    median = weighted_median(angle, weight)
     median = (median + 90.0) % 180.0 - 90.0
     width = np.sqrt(np.clip(values[:, 0], 0.0, None) / np.maximum(values[:, 1], 1e-300))
-    elevation = math.degrees(math.asin(min(1.0, _weighted_median(width, weight))))
+    elevation = math.degrees(math.asin(min(1.0, weighted_median(width, weight))))
     return PathShape(median, elevation, int(usable.sum()))
 
-
-def _weighted_median(values: np.ndarray, weight: np.ndarray) -> float:
-    order = np.argsort(values)
-    cumulative = np.cumsum(weight[order])
-    return float(values[order][np.searchsorted(cumulative, cumulative[-1] / 2)])
 
 
 def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, camera: Camera | None = None,

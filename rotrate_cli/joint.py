@@ -30,10 +30,10 @@ from collections.abc import Callable
 import numpy as np
 
 from rotrate_cli.lazy import pandas as pd
-from rotrate_cli.lazy import student_t_975
 from rotrate_cli.outliers import Combined
 from rotrate_cli.ragged import Ragged
 from rotrate_cli.rates import Camera, solve_two_columns
+from rotrate_cli.stats import student_t_975
 
 #: Grid points of the search for the minimum, and the relative grid step at which it stops.
 _SEARCH_POINTS = 13

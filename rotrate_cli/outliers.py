@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rotrate_cli.lazy import pandas as pd
-from rotrate_cli.lazy import student_t_975
 from rotrate_cli.rates import TrackFit
+from rotrate_cli.stats import student_t_975, weighted_median
 
 FEATURE_COLUMNS = (
     "track", "samples", "omega_rad_s", "omega_se_rad_s", "rms_residual", "amplitude", "arc_rad", "sense",
@@ -69,11 +69,6 @@ class Combined:
     tracks_used: int
 
 
-def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
-    order = np.argsort(values)
-    cumulative = np.cumsum(weights[order])
-    return float(values[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
-
 
 def judge_fits(samples: pd.DataFrame, fits: dict[int, TrackFit], config: RejectionConfig) -> pd.DataFrame:
     """One row per track with its fitted rate and a verdict (``inlier``, ``reason``).
@@ -115,7 +110,7 @@ def _reject_disagreeing(table: pd.DataFrame, reason: pd.Series, z_limit: float) 
         return reason
     omega = table.loc[candidates, "omega_rad_s"].to_numpy()
     se = np.maximum(table.loc[candidates, "omega_se_rad_s"].to_numpy(), 1e-12)
-    centre = _weighted_median(omega, 1.0 / se**2)
+    centre = weighted_median(omega, 1.0 / se**2)
     spread = 1.4826 * float(np.median(np.abs(omega - centre)))
     z = np.abs(omega - centre) / np.sqrt(se**2 + spread**2)
     index = table.index[candidates]

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rotrate_cli.lazy import pandas as pd
+from rotrate_cli.stats import weighted_median
 
 #: Tracks that speak for the view: at least this many samples, turning through at least this
 #: much (rad) at the measured rate, fitting their ellipse within this misfit (px) and moving at
@@ -171,11 +172,11 @@ def view_from_paths(tracks: pd.DataFrame, omega_rad_s: float) -> View | None:
     # a longer arc sets its ellipse better, and a larger one its centre: a small path may be a
     # slight wobble anywhere, a large one is the body turning
     weight = np.minimum(fit.turn_rad[passing], 2 * math.pi) * major[passing]
-    elevation = math.degrees(math.asin(min(1.0, _weighted_median(width, weight))))
+    elevation = math.degrees(math.asin(min(1.0, weighted_median(width, weight))))
     centres = fit.coef[passing, 0, :]
-    centre = (_weighted_median(centres[:, 0], weight), _weighted_median(centres[:, 1], weight))
+    centre = (weighted_median(centres[:, 0], weight), weighted_median(centres[:, 1], weight))
     spread = float(np.median(np.hypot(centres[:, 0] - centre[0], centres[:, 1] - centre[1])))
-    size = _weighted_median(major[passing], weight)
+    size = weighted_median(major[passing], weight)
     if spread > MAX_SPREAD * size:
         return None
     doubled = 2.0 * direction[passing]  # a direction has no sign: average the doubled angles
@@ -287,8 +288,3 @@ class _Circles:
         misfit2 = np.add.reduceat((self.u - fitted_u) ** 2 + (self.v - fitted_v) ** 2, starts) / self.counts
         return float((np.minimum(misfit2, MAX_MISFIT_PX ** 2) * self.counts).sum())
 
-
-def _weighted_median(values: np.ndarray, weight: np.ndarray) -> float:
-    order = np.argsort(values)
-    cumulative = np.cumsum(weight[order])
-    return float(values[order][np.searchsorted(cumulative, cumulative[-1] / 2)])
