@@ -260,15 +260,19 @@ class FrameSource:
         program = ffmpeg_program()
         piped = first_frame(program, self._source, width, height) if program is not None else None
         if piped is not None and piped.max() > 0:
-            self._pipe, self._codec = program, "PIPE"
-            self.warnings.append("OpenCV decodes this video's frames black (an interlaced stream: camcorder, "
-                                 "broadcast, DV?); it is read through FFmpeg instead, deinterlaced")
+            self._switch_to_ffmpeg(program)
             return piped
         if program is None and self._starts_black():
             self.warnings.append(f"the first frames of {self._source} decode black; if the video is not black there "
                                  "it is probably interlaced, which this OpenCV decodes as black: deinterlace it "
                                  "(ffmpeg -i IN -vf yadif OUT.mp4) or pip install 'rotrate[ffmpeg]'")
         return first
+
+    def _switch_to_ffmpeg(self, program: str) -> None:
+        """Read the video through ``program`` (FFmpeg) from now on, and say so once."""
+        self._pipe, self._codec = program, "PIPE"
+        self.warnings.append("OpenCV decodes this video's frames black or frozen (an interlaced stream: camcorder, "
+                             "broadcast, DV?); it is read through FFmpeg instead, deinterlaced")
 
     def use_ffmpeg(self) -> bool:
         """Read the video through FFmpeg from now on (see :mod:`rotrate_cli.pipe`), for a caller
@@ -278,9 +282,7 @@ class FrameSource:
         program = ffmpeg_program() if self._files is None and self._pipe is None else None
         if program is None:
             return False
-        self._pipe, self._codec = program, "PIPE"
-        self.warnings.append("OpenCV decodes this video's frames black or frozen (an interlaced stream: camcorder, "
-                             "broadcast, DV?); it is read through FFmpeg instead, deinterlaced")
+        self._switch_to_ffmpeg(program)
         return True
 
     def _decodes_black(self, capture: cv2.VideoCapture, quiet: bool) -> bool:
@@ -312,9 +314,7 @@ class FrameSource:
                 raise InputError(f"OpenCV decodes the frames of {self._source} black (an interlaced stream: camcorder, "
                                  "broadcast, DV?): deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4) or pip install "
                                  "'rotrate[ffmpeg]'")
-            self._pipe, self._codec = program, "PIPE"
-            self.warnings.append("OpenCV decodes this video's frames black (an interlaced stream: camcorder, "
-                                 "broadcast, DV?); it is read through FFmpeg instead, deinterlaced")
+            self._switch_to_ffmpeg(program)
         assert self._pipe is not None  # noqa: S101 - only called in pipe mode
         for index, image in enumerate(piped_frames(self._pipe, self._source, self.info.width_px,
                                                    self.info.height_px)):
