@@ -1,9 +1,15 @@
 """The whole job in one call: :func:`analyze` for a video, :func:`analyze_tracks` for tracks.
 
-A composition of stages, top to bottom: decode (a background thread, reduced grey frames, with a
-thumbnail of each) -> tracks (:mod:`rotrate_cli.tracking`) -> the clip's repetition
-(:mod:`rotrate_cli.period`) -> geometry: camera, axis angle, fixation (:mod:`rotrate_cli.geometry`)
--> fits (:mod:`rotrate_cli.fits`) -> the judged estimate (:mod:`rotrate_cli.verdict`).
+A composition of stages, top to bottom, each a function of its own module taking the previous
+stage's result:
+
+1. tracks (:func:`rotrate_cli.footage.read_footage`): decode, track, and the motion's direction;
+2. the clip's repetition (:func:`rotrate_cli.period.find_period`);
+3. geometry: camera, axis and fixation (:func:`rotrate_cli.geometry.locate`);
+4. fits, the fixation refined (:func:`rotrate_cli.geometry.measure`), rejected tracks named
+   (:mod:`rotrate_cli.reasons`) and the rate checked (:func:`rotrate_cli.doubts.check_rate`);
+5. the judged estimate (:func:`rotrate_cli.verdict.judge`), and the view at the rate reported
+   (:func:`rotrate_cli.geometry.settle_view`).
 """
 
 from __future__ import annotations
@@ -16,56 +22,35 @@ from pathlib import Path
 
 import numpy as np
 
-from rotrate_cli import axis as axes
-from rotrate_cli.chosen import follow_points
+from rotrate_cli.bodies import measure_bodies
+from rotrate_cli.camera import lens_from
 from rotrate_cli.config import AnalysisConfig, check_config
-from rotrate_cli.csrt import CsrtTracker, csrt_settings
-from rotrate_cli.decode import FrameSource, prefetch
+from rotrate_cli.doubts import Checked, check_rate
 from rotrate_cli.errors import InputError, NoResultError
 from rotrate_cli.fits import (
     RateResult,
     no_result_message,
-    rate_change,
     rates_from_offsets,
     sample_rates,
+    sample_spacing,
     thin,
 )
 from rotrate_cli.focal import FocalEstimate
-from rotrate_cli.geometry import (
-    MIN_TRACKS_FOR_ANGLE,
-    across,
-    find_focal,
-    fixation_doubt,
-    measure_body,
-    method_name,
-    path_shape,
-    prepare_body,
-    with_lens_doubt,
-)
+from rotrate_cli.footage import Footage, ProgressCallback, read_footage
+from rotrate_cli.geometry import Geometry, locate, measure, settle_view
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
-from rotrate_cli.outliers import (
-    FEATURE_COLUMNS,
-    Combined,
-    RejectionConfig,
-)
-from rotrate_cli.period import Period, Thumbnails, find_period
+from rotrate_cli.outliers import FEATURE_COLUMNS, Combined, RejectionConfig
+from rotrate_cli.period import Period, find_period
 from rotrate_cli.reasons import name_rejections, track_places
-from rotrate_cli.segment import Body, segment_tracks, unresolved
+from rotrate_cli.segment import Body
 from rotrate_cli.series import rate_series
-from rotrate_cli.tracking import (
-    VIDEO_BLUR_SIGMA_PX,
-    TrackerConfig,
-    TrackingRun,
-    track_frames,
-    tracking_image,
-    tracking_scale,
-)
 from rotrate_cli.verdict import Verdict, judge
-from rotrate_cli.view import View, keep_for_view, rate_from_paths, view_from_paths
+from rotrate_cli.view import View, keep_for_view
 
-#: Progress callback: (frames done, frames expected or None).
-ProgressCallback = Callable[[int, int | None], None]
+__all__ = ["Analysis", "AnalysisConfig", "ProgressCallback", "analyze", "analyze_tracks", "rates_from_offsets",
+           "thin"]
+
 StageCallback = Callable[[str], None]
 
 
@@ -197,403 +182,138 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
 
 
 def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None,
-             stage: StageCallback | None = None) -> Analysis:
-    video = FrameSource(source, fps=config.fps,
-                        times_s=None if config.times_s is None else np.asarray(config.times_s, dtype=np.float64))
-    info = video.info
-    warnings_early: list[str] = list(video.warnings)
-    camera_from = "given" if config.fov_deg is not None or config.focal_px is not None else "orthographic"
-    if camera_from == "orthographic" and info.focal_px is not None and config.find_focal and config.method == "fit":
-        config = replace(config, focal_px=info.focal_px)  # the photographs' own lens
-        camera_from = "exif"
-    if config.fixation_px is not None:
-        fx, fy = config.fixation_px
-        if not (math.isfinite(fx) and math.isfinite(fy)):
-            raise InputError("--fixation must be two numbers X,Y in pixels, or auto")
-        if not (0 <= fx <= info.width_px - 1 and 0 <= fy <= info.height_px - 1):
-            # a record player's spindle seen close up lies outside the picture: measured, but said
-            warnings_early.append(f"the fixation ({fx:g}, {fy:g}) lies outside the {info.width_px}x{info.height_px} "
-                                  "frame; check it, or use --fixation auto")
-    roi = config.tracker.roi
-    if roi is not None and (
-        roi.width_px <= 0 or roi.height_px <= 0 or roi.x_px < 0 or roi.y_px < 0
-        or roi.x_px + roi.width_px > info.width_px or roi.y_px + roi.height_px > info.height_px
-    ):
-        raise InputError(f"--roi must be X,Y,W,H inside the {info.width_px}x{info.height_px} frame")
-
-    tracker = config.tracker
-    if config.axis_angle_deg is not None and across(config.axis_angle_deg):
-        tracker = _turned(tracker)
-    thumbnails = Thumbnails()
-    run = _track(video, config, tracker, progress, thumbnails)
-    count = run.frames
-    if count == 0:
-        raise InputError(f"no frame of {source} lies between --start and --end")
-    if count < 3:
-        raise InputError(f"{source} has only {count} frame(s) to analyse; rotation needs at least 3")
-    if run.tracks.empty and thumbnails.lifeless_fraction() >= LIFELESS and video.use_ffmpeg():
-        # OpenCV's trouble with interlaced streams: black frames, or one frozen garbled picture;
-        # it strikes some openings of a file and not others, so it is caught here too
-        thumbnails.clear()
-        run = _track(video, config, tracker, progress, thumbnails)
-        count = run.frames
-    if run.tracks.empty:
-        hint = ("if the video shows motion, it is probably interlaced (camcorder, broadcast, DV), which this OpenCV "
-                "cannot decode: deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4) or pip install 'rotrate[ffmpeg]'")
-        if thumbnails.black_fraction() >= LIFELESS:
-            raise InputError(f"the frames of {source} decode black: {hint}")
-        if thumbnails.lifeless_fraction() >= LIFELESS:
-            raise NoResultError(f"no point could be tracked: the picture does not change from frame to frame; {hint}")
-        raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
-    everything = _by_track(run.tracks)
-    release_free_memory()  # the tracker's store and the frames' buffers are gone
-    angle = config.axis_angle_deg
-    assumed_vertical = False
-    elevation_found = math.nan
-    angle_source = config.angle_from
-    if angle is None and everything["track"].nunique() < MIN_TRACKS_FOR_ANGLE:
-        angle, assumed_vertical = 0.0, True  # a few points' wobble says little about the axis
-    if angle is None:
-        angle = axes.motion_angle_deg(everything)
-        if across(angle):
-            # the motion runs up and down the image: track again with the window turned to suit it
-            thumbnails.clear()
-            run = _track(video, config, _turned(tracker), progress, thumbnails)
-            if run.tracks.empty:
-                raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
-            everything = _by_track(run.tracks)
-            angle = axes.motion_angle_deg(everything)
-        angle = angle if math.isfinite(angle) else 0.0
-        if config.angle_from == "paths":
-            shape = path_shape(everything, angle)
-            if shape is None:
-                warnings_early.append("too few tracks turned far enough to read the axis from their paths: "
-                                      "it is found from the motion")
-                angle_source = "motion"
-            else:
-                angle, elevation_found = shape.angle_deg, shape.elevation_deg
-                if config.elevation_deg is None:
-                    config = replace(config, elevation_deg=elevation_found)
+             stage: StageCallback | None) -> Analysis:
+    footage = read_footage(source, config, progress)
     if stage is not None:
         stage("fitting the tracks")
-    # the decoder may have learnt something while it read (a stream OpenCV decodes black)
-    warnings_early += [warning for warning in video.warnings if warning not in warnings_early]
-    warnings = list(run.notes) + warnings_early
-    if assumed_vertical:
-        warnings.append("too few tracks to find the axis's angle: taken as vertical (give --axis-angle DEG)")
-    if config.start_s == 0 and config.end_s is None:
-        short = video.shortfall(count, run.last_time_s)
-        if short is not None:
-            warnings.append(short)
-
-    duration_s = run.last_time_s - run.first_time_s
-    del run
-    size_px = (info.width_px, info.height_px)
-    context = {"source": str(source), "fps": info.fps, "frames": count, "duration_s": duration_s,
-               "rejection": config.rejection, "axis_angle_deg": float(angle),
-               "axis_found": config.fixation_px is None,
-               "axis_angle_found": config.axis_angle_deg is None and not assumed_vertical,
-               "axis_angle_from": angle_source, "elevation_deg": elevation_found, "clock": info.clock,
-               "camera_from": camera_from}
+    if config.window_s is not None and config.window_s > footage.duration_s:
+        raise InputError(f"--window {config.window_s:g} s is longer than the {footage.duration_s:.2f} s analysed; "
+                         "give a window shorter than the clip (a few seconds, about a quarter turn or more)")
+    tracks = footage.tracks
     if config.every is None:
-        config = replace(config, every=_sample_spacing(everything, angle, config.method))
+        config = replace(config, every=sample_spacing(tracks, _angle_guess(footage, config), config.method))
+    size_px = (footage.info.width_px, footage.info.height_px)
     if config.segment:
-        return _segmented(everything, angle, config, size_px, warnings, context)
-    kept = None
-    if config.keep_tracks:  # for pictures of the measurement (an overlay): numbered as the features
-        kept = everything[["frame", "time_s", "track", "x_px", "y_px"]].assign(track=everything["track"] + 1)
-    period = _repetition(thumbnails, config, info.clock_resolution_s)
-    thumbnails.clear()
-    view_tracks = keep_for_view(everything)  # the view is read at the rate reported, once it is known
-    places = track_places(everything)  # where each track lies: to name why the rejected were
+        return _segmented(footage, config)
+    period = _repetition(footage, config)
+    footage.thumbnails.clear()
+    kept = _kept_tracks(tracks) if config.keep_tracks else None
+    view_tracks = keep_for_view(tracks)  # the view is read at the rate reported, once it is known
+    places = track_places(tracks)  # where each track lies: to name why the rejected were
     try:
-        body = prepare_body(everything, angle, config)
+        geometry, body = locate(tracks, footage.motion_angle_deg, config, footage.info, seek_lens=period is None)
     except NoResultError:
         if period is None:
             raise
-        return _with_view(_repetition_only(period, config, warnings, kept, context), view_tracks, config, size_px)
-    focal = None
-    # the lens is sought only where the tracks' rate is what is reported: a clip that repeats is
-    # measured by its repetition, which needs no model of the camera (and the search costs
-    # seconds on a 720p clip)
-    if (config.find_focal and camera_from == "orthographic" and config.method == "fit" and not config.points_px
-            and period is None):
-        config, focal = find_focal(everything, body, angle, config, size_px)
-        if focal is not None:
-            context["camera_from"] = "found"
-            if math.isfinite(focal.focal_px):
-                context["elevation_deg"] = focal.elevation_deg
-    del everything  # the offsets hold what is needed: a long clip's positions need not stay
+        return _repetition_only(footage, period, config, kept, view_tracks)
+    footage = replace(footage, tracks=tracks.iloc[:0])
+    del tracks  # the offsets hold what is needed: a long clip's positions need not stay
     release_free_memory()
-    fixation, result, camera = measure_body(body, angle, config, size_px, steady=period is not None)
+    geometry, result = measure(body, geometry, config, size_px, steady=period is not None)
     del body
-    result = replace(result, features=name_rejections(result.features, places, fixation, angle,
-                                                      result.combined.omega_rad_s, result.offsets))
-    if focal is not None and math.isfinite(focal.focal_px) and result.combined.tracks_used > 0:
-        result = with_lens_doubt(result, focal, fixation, angle, config, size_px)
-    if result.combined.tracks_used == 0 and period is not None:
-        return _with_view(_repetition_only(period, config, warnings, kept, context, result), view_tracks, config,
-                          size_px)
-    doubts: tuple[str, ...] = ()
-    if config.fixation_px is not None and period is None:  # the repetition's rate needs no axis
-        doubt = fixation_doubt(result, camera, fixation, angle, config, size_px)
-        doubts = () if doubt is None else (doubt,)
-    change = rate_change(result, config, camera) if period is None else None
-    if change is not None:
-        doubts += (change,)
+    result = replace(result, features=name_rejections(result.features, places, geometry.fixation_px,
+                                                      geometry.axis_angle_deg, result.combined.omega_rad_s,
+                                                      result.offsets))
+    checked = check_rate(result, geometry, config, size_px, view_tracks, repeating=period is not None)
+    if checked.result.combined.tracks_used == 0 and period is not None:
+        return _repetition_only(footage, period, config, kept, view_tracks, checked.result, geometry)
     series = None
-    if config.window_s is not None and config.window_s > duration_s:
-        raise InputError(f"--window {config.window_s:g} s is longer than the {duration_s:.2f} s analysed; give a "
-                         "window shorter than the clip (a few seconds, about a quarter turn or more)")
     if config.window_s is not None:
-        series = rate_series(result.offsets, config.window_s,
+        camera = geometry.camera(size_px)
+        series = rate_series(checked.result.offsets, config.window_s,
                              lambda part: rates_from_offsets(part, config.method, config.rejection, camera).combined)
-    if period is None and result.combined.tracks_used > 0:
-        result, note = _with_paths_rate(result, view_tracks)
-        warnings += [note] if note else []
-    analysis = _result(result, fixation_px=(float(fixation[0]), float(fixation[1])),
-                       method=method_name(config, camera), warnings=tuple(warnings), series=series, tracks=kept,
-                       focal=focal, period=period, doubts=doubts, **context)
-    return _with_view(analysis, view_tracks, config, size_px)
+    return _result(footage, config, geometry, checked, period, view_tracks, series=series, tracks=kept)
 
 
-def _with_paths_rate(result: RateResult, view_tracks: pd.DataFrame) -> tuple[RateResult, str | None]:
-    """Seen obliquely or face on, the result with its interval widened to hold the rate of the
-    tracks' paths in both image coordinates (:func:`rotrate_cli.view.rate_from_paths`), and a
-    note saying so; as it was in a side view, or where the two agree. The offsets across one
-    image direction assume the paths' centres line up across it, which an axis leaning towards
-    the camera breaks (rendered box from 60 degrees above: -2.5%, interval [-4.7%, -0.3%]; its
-    paths: +0.6%)."""
-    combined = result.combined
-    view = view_from_paths(view_tracks, combined.omega_rad_s)
-    if view is None or view.name == "side":
-        return result, None
-    paths = rate_from_paths(view_tracks, combined.omega_rad_s) * (1.0 if combined.omega_rad_s >= 0 else -1.0)
-    if not math.isfinite(paths) or combined.omega_low_rad_s <= paths <= combined.omega_high_rad_s:
-        return result, None
-    widened = Combined(combined.omega_rad_s, min(combined.omega_low_rad_s, paths),
-                       max(combined.omega_high_rad_s, paths), combined.tracks_used)
-    note = (f"seen {view.name} ({view.elevation_deg:.0f} deg), the tracks' paths fitted in both image coordinates "
-            f"give {paths:.4g} rad/s, outside the offsets' interval: the interval is widened to hold it")
-    return replace(result, combined=widened), note
+def _angle_guess(footage: Footage, config: AnalysisConfig) -> float:
+    """The axis's angle before the geometry stage: for the paper's sample spacing."""
+    if config.axis_angle_deg is not None:
+        return config.axis_angle_deg
+    return footage.motion_angle_deg if math.isfinite(footage.motion_angle_deg) else 0.0
 
 
-def _with_view(analysis: Analysis, view_tracks: pd.DataFrame, config: AnalysisConfig,
-               size_px: tuple[int, int]) -> Analysis:
-    """The analysis with the view read from the tracks' paths at its reported rate
-    (:mod:`rotrate_cli.view`). Where the rate is the clip's repetition and the fixation was to
-    be found, the found fixation is the paths' turning centre: the tracks' own axis search
-    assumes a side view (on the record clip it put the spindle 380 px off; the paths' centre is
-    25 px off, and 37 px off where the picture is cropped to leave the spindle outside it)."""
-    view = view_from_paths(view_tracks, analysis.omega_rad_s)
-    if view is None:
-        return analysis
-    changes: dict[str, object] = {"view": view}
-    if math.isnan(analysis.elevation_deg):
-        changes["elevation_deg"] = view.elevation_deg
-    if config.fixation_px is None and analysis.rate_from == "repetition":
-        changes["fixation_px"] = view.centre_px
-        x, y = view.centre_px
-        if not (0 <= x <= size_px[0] - 1 and 0 <= y <= size_px[1] - 1):
-            changes["warnings"] = (*analysis.warnings, f"the axis found, ({x:.0f}, {y:.0f}), lies outside the "
-                                   f"{size_px[0]}x{size_px[1]} frame")
-    return replace(analysis, **changes)
+def _kept_tracks(tracks: pd.DataFrame) -> pd.DataFrame:
+    """The positions for pictures of the measurement (an overlay), numbered as the features."""
+    return tracks[["frame", "time_s", "track", "x_px", "y_px"]].assign(track=tracks["track"] + 1)
 
 
-#: A run whose frames are this often black, or the same as the one before pixel for pixel, got
-#: nothing from its decoder (see :meth:`rotrate_cli.period.Thumbnails.lifeless_fraction`).
-LIFELESS = 0.5
-
-
-#: The paper's method differentiates positions this far apart in angle (its 16 frames at 30 fps
-#: of a car turning at 0.327 rad/s): closer, its second differences are noise (+201% at --every 1).
-PAPER_SPACING_RAD = 1.0 / 6.0
-
-
-def _sample_spacing(everything: pd.DataFrame, angle_deg: float, method: str) -> int:
-    """``--every`` when not given: 1 for the fit method; for the paper's, the frames that make
-    :data:`PAPER_SPACING_RAD` at a first rate from the tracks (the recurrence), at least 1."""
-    if method != "paper":
-        return 1
-    omega = axes.rate_from_recurrence(everything, axes.offsets_along(everything, (0.0, 0.0), angle_deg))
-    times = everything.drop_duplicates("frame")["time_s"].to_numpy()
-    step_s = float(np.median(np.diff(np.sort(times)))) if len(times) > 1 else math.nan
-    if not (math.isfinite(omega) and omega > 0 and math.isfinite(step_s) and step_s > 0):
-        return 1
-    return max(1, round(PAPER_SPACING_RAD / (omega * step_s)))
-
-
-def _repetition(thumbnails: Thumbnails, config: AnalysisConfig, clock_resolution_s: float) -> Period | None:
+def _repetition(footage: Footage, config: AnalysisConfig) -> Period | None:
     """The clip's repetition (:mod:`rotrate_cli.period`) where it can stand for the body's turn:
     the fit method on automatic points (chosen points and the paper's method are measured as
     they are; several bodies do not repeat as one)."""
     if config.method != "fit" or config.points_px or config.segment:
         return None
-    return find_period(thumbnails.times_s, thumbnails.images, clock_resolution_s)
+    thumbnails = footage.thumbnails
+    return find_period(thumbnails.times_s, thumbnails.images, footage.info.clock_resolution_s)
 
 
-def _repetition_only(period: Period, config: AnalysisConfig, warnings: list[str], kept: pd.DataFrame | None,
-                     context: dict[str, object], result: RateResult | None = None) -> Analysis:
+def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checked: Checked, period: Period | None,
+            view_tracks: pd.DataFrame | None, notes: tuple[str, ...] = (), **extra: object) -> Analysis:
+    """The Analysis: the reported rate judged from the checked tracks' rate and the clip's
+    repetition (:func:`rotrate_cli.verdict.judge`), and the view read at it. NoResultError when
+    neither gave a rate."""
+    result = checked.result
+    combined = result.combined
+    if combined.tracks_used == 0 and period is None:
+        raise NoResultError(no_result_message(result.features))
+    verdict = judge(combined if combined.tracks_used > 0 else None, period, combined.tracks_used, checked.doubts)
+    size_px = (footage.info.width_px, footage.info.height_px)
+    if view_tracks is not None:
+        geometry = settle_view(geometry, view_tracks, verdict.omega_rad_s, verdict.rate_from, size_px)
+    warnings = footage.warnings + geometry.notes + notes + checked.notes + verdict.notes
+    if verdict.quality == "weak":
+        warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
+    return Analysis(
+        source=footage.info.source, fps=footage.info.fps, frames=footage.frames, duration_s=footage.duration_s,
+        fixation_px=geometry.fixation_px,
+        omega_rad_s=verdict.omega_rad_s, omega_low_rad_s=verdict.omega_low_rad_s,
+        omega_high_rad_s=verdict.omega_high_rad_s, direction=result.direction,
+        tracks_total=int(len(result.features)), tracks_used=combined.tracks_used, features=result.features,
+        offsets=result.offsets, rejection=config.rejection, warnings=warnings,
+        axis_angle_deg=float(geometry.axis_angle_deg), axis_found=geometry.fixation_found,
+        axis_angle_found=geometry.angle_from in ("motion", "paths"),
+        axis_angle_from=geometry.angle_from if geometry.angle_from in ("motion", "paths") else config.angle_from,
+        elevation_deg=geometry.elevation_deg, verdict=verdict, period=period, clock=footage.info.clock,
+        camera_from=geometry.lens.source, view=geometry.view,
+        **{"method": _method_name(config.method, geometry, size_px), "focal": geometry.lens.estimate, **extra},
+    )
+
+
+def _method_name(method: str, geometry: Geometry, size_px: tuple[int, int]) -> str:
+    camera = geometry.camera(size_px)
+    return method if camera is None else f"{method}+pinhole(f={camera.focal_px:.1f}px)"
+
+
+def _repetition_only(footage: Footage, period: Period, config: AnalysisConfig, kept: pd.DataFrame | None,
+                     view_tracks: pd.DataFrame, result: RateResult | None = None,
+                     geometry: Geometry | None = None) -> Analysis:
     """The Analysis when no track gave a rate but the clip repeats: the rate is the repetition's,
-    the sense of turning unknown."""
+    the sense of turning unknown, and the fixation the one given (else found from the paths'
+    centre by the view, where they tell one)."""
     features = result.features if result is not None else pd.DataFrame(columns=list(FEATURE_COLUMNS))
     offsets = result.offsets if result is not None else pd.DataFrame(
         {"track": pd.Series(dtype=int), "frame": pd.Series(dtype=int), "time_s": pd.Series(dtype=float),
          "offset_px": pd.Series(dtype=float)})
     empty = RateResult(offsets, features, Combined(math.nan, math.nan, math.nan, 0), "unknown")
     fixation = config.fixation_px if config.fixation_px is not None else (math.nan, math.nan)
+    if geometry is None:  # the axis was not found: as far as the tracks went
+        geometry = Geometry(_angle_guess(footage, config), "given" if config.axis_angle_deg is not None else "motion",
+                            (math.nan, math.nan), config.fixation_px is None, lens_from(config, footage.info))
+    geometry = replace(geometry, fixation_px=(float(fixation[0]), float(fixation[1])))
     hint = ("; CSRT loses points that jump far between frames (stills taken far apart, fast turns): the default "
             "--tracker klt follows those") if config.tracker_kind == "csrt" else ""
-    notes = [*warnings, "no track gave a rate: the rate is the clip's repetition alone, and the sense of turning "
-             f"is unknown{hint}"]
-    return _result(empty, fixation_px=(float(fixation[0]), float(fixation[1])), method=config.method,
-                   warnings=tuple(notes), series=None, tracks=kept, focal=None, period=period, **context)
+    note = ("no track gave a rate: the rate is the clip's repetition alone, and the sense of turning "
+            f"is unknown{hint}")
+    return _result(footage, config, geometry, Checked(empty), period, view_tracks, notes=(note,),
+                   method=config.method, focal=None, series=None, tracks=kept)
 
 
-def running_rate(analysis: Analysis, step_s: float | None = None) -> pd.DataFrame:
-    """The rate as it would have been measured up to each time: ``time_s, omega_rad_s,
-    omega_low_rad_s, omega_high_rad_s, tracks_used`` every ``step_s`` (default: a twentieth of
-    the clip, at least half a second), from the analysis's own offsets and rules. NaN until
-    enough of a turn has been seen."""
-    offsets = analysis.offsets
-    times = offsets["time_s"].to_numpy()
-    first, last = float(times.min()), float(times.max())
-    step = step_s if step_s is not None else max(0.5, (last - first) / 20.0)
-    rows = []
-    method = "paper" if analysis.method == "paper" else "fit"
-    for end in np.arange(first + step, last + step / 2, step):
-        part = offsets[times <= end]
-        try:
-            combined = rates_from_offsets(part, method, analysis.rejection).combined
-        except (ValueError, IndexError):
-            combined = Combined(math.nan, math.nan, math.nan, 0)
-        rows.append((float(min(end, last)), combined.omega_rad_s, combined.omega_low_rad_s,
-                     combined.omega_high_rad_s, combined.tracks_used))
-    return pd.DataFrame(rows, columns=["time_s", "omega_rad_s", "omega_low_rad_s", "omega_high_rad_s",
-                                       "tracks_used"])
-
-
-def _segmented(
-    everything: pd.DataFrame, angle: float, config: AnalysisConfig, size_px: tuple[int, int],
-    warnings: list[str], context: dict[str, object],
-) -> Analysis:
-    """Group the tracks into rigid bodies (:mod:`rotrate_cli.segment`) and measure each; the
+def _segmented(footage: Footage, config: AnalysisConfig) -> Analysis:
+    """Group the tracks into rigid bodies (:mod:`rotrate_cli.bodies`) and measure each; the
     largest measured body is the analysis's headline result, all are in ``bodies``."""
-    ux, uy = axes.unit_offset(angle)
-    extent_px = abs(size_px[0] * ux) + abs(size_px[1] * uy)
-    groups = segment_tracks(everything, axes.offsets_along(everything, (0.0, 0.0), angle), extent_px)
-    track = everything["track"].to_numpy()
-    measured = []
-    for ids in groups:
-        part = everything[np.isin(track, ids)].reset_index(drop=True)
-        try:
-            fixation, result, camera = measure_body(prepare_body(part, angle, config), angle, config, size_px)
-        except NoResultError:
-            continue
-        if result.combined.tracks_used > 0:
-            measured.append((fixation, result, camera, len(ids)))
-    if not measured:
-        raise NoResultError(f"no rigid body could be measured ({len(groups)} group(s) of tracks found); "
-                            "try a longer clip or --roi around one object")
-    skipped = len(groups) - len(measured)
-    if skipped:
-        warnings.append(f"{skipped} group(s) of tracks gave no trustworthy rate and are not reported")
-    measured, folded = _distinct_bodies(measured, ux, uy, extent_px)
-    if folded:
-        warnings.append(f"{folded} smaller group(s) of tracks measured like a larger body (rate and axis within "
-                        "the resolution) and are not reported as bodies of their own")
-    bodies = tuple(
-        Body(r.combined.omega_rad_s, r.combined.omega_low_rad_s, r.combined.omega_high_rad_s,
-             (float(f[0]), float(f[1])), r.direction, r.combined.tracks_used, total)
-        for f, r, _, total in measured
-    )
-    fixation, result, camera, _ = measured[0]
-    return _result(result, fixation_px=(float(fixation[0]), float(fixation[1])), method=method_name(config, camera),
-                   warnings=tuple(warnings), series=None, bodies=bodies, **context)
-
-
-def _distinct_bodies(measured: list, ux: float, uy: float, extent_px: float) -> tuple[list, int]:
-    """The measured bodies (largest group first) without those whose measured rate and axis lie
-    within the resolution of a larger one (:func:`rotrate_cli.segment.unresolved`), and how
-    many were left out. Grouping works on each track's own rough estimates; a group of
-    mis-tracks along an outline can look apart there and measure like the body it borders:
-    seen on a 32 s 720p cylinder, 57 rim tracks (1% of them) measured 1.27 rad/s about an axis 8
-    px from the body's 1.57."""
-    kept: list = []
-    for entry in measured:
-        fixation, result = entry[0], entry[1]
-        axis_px = fixation[0] * ux + fixation[1] * uy
-        if not any(unresolved(result.combined.omega_rad_s, axis_px, other[1].combined.omega_rad_s,
-                              other[0][0] * ux + other[0][1] * uy, extent_px) for other in kept):
-            kept.append(entry)
-    return kept, len(measured) - len(kept)
-
-
-def _by_track(tracks: pd.DataFrame) -> pd.DataFrame:
-    """``tracks`` sorted by track then frame (the tracker hands them over so: then as they are)."""
-    track, frame = tracks["track"].to_numpy(), tracks["frame"].to_numpy()
-    step = np.diff(track)
-    if ((step > 0) | ((step == 0) & (np.diff(frame) > 0))).all():
-        return tracks
-    return tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True)
-
-
-def _turned(tracker: TrackerConfig) -> TrackerConfig:
-    """The tracker with its window turned a quarter: narrow across the motion again (see
-    :class:`rotrate_cli.tracking.TrackerConfig`) when points move up and down the image."""
-    return replace(tracker, win_width_px=tracker.win_height_px, win_height_px=tracker.win_width_px)
-
-
-def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
-           progress: ProgressCallback | None, thumbnails: Thumbnails) -> TrackingRun:
-    """Decode (in a background thread) and track the frames of ``video`` between start and end,
-    keeping a thumbnail of each in ``thumbnails`` (for the repetition, :mod:`rotrate_cli.period`)."""
-    info = video.info
-    scale = tracking_scale(info.width_px, tracker)
-    blur = tracker.blur_sigma_px
-    if blur is None:
-        blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
-    # the luma table is known once the stream has read (and checked) its first frame
-    frames = video.frames(config.start_s, config.end_s, grey=True, map_luma=False,
-                          transform=lambda image: tracking_image(image, scale, blur, video.luma_levels()))
-    expected = info.frame_count
-    notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
-    size_px = (info.width_px, info.height_px)
-    stream = thumbnails.tap(prefetch(frames))
-    if config.points_px:
-        return follow_points(stream, size_px, list(config.points_px), config.tracker_kind, tracker, notify)
-    if config.tracker_kind == "csrt":
-        return track_frames(stream, size_px, csrt_settings(tracker), notify, kind=CsrtTracker)
-    return track_frames(stream, size_px, tracker, notify)
-
-
-def _result(rates_result: RateResult, period: Period | None = None, doubts: tuple[str, ...] = (),
-            **context: object) -> Analysis:
-    """The Analysis of a rate result, the clip's repetition (if any) and their context: the
-    reported rate is judged from both (:func:`rotrate_cli.verdict.judge`), with ``doubts`` about
-    the tracks' rate. NoResultError when neither gave a rate."""
-    combined = rates_result.combined
-    if combined.tracks_used == 0 and period is None:
-        raise NoResultError(no_result_message(rates_result.features))
-    verdict = judge(combined if combined.tracks_used > 0 else None, period, combined.tracks_used, doubts)
-    warnings = tuple(context.pop("warnings", ()))  # type: ignore[arg-type]
-    warnings += verdict.notes
-    if verdict.quality == "weak":
-        warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
-    return Analysis(
-        omega_rad_s=verdict.omega_rad_s,
-        omega_low_rad_s=verdict.omega_low_rad_s,
-        omega_high_rad_s=verdict.omega_high_rad_s,
-        direction=rates_result.direction,
-        tracks_total=int(len(rates_result.features)),
-        tracks_used=combined.tracks_used,
-        features=rates_result.features,
-        offsets=rates_result.offsets,
-        warnings=warnings,
-        verdict=verdict,
-        period=period,
-        **context,  # type: ignore[arg-type]
-    )
+    found = measure_bodies(footage.tracks, footage.motion_angle_deg, config, footage.info)
+    return _result(footage, config, found.geometry, Checked(found.result), None, None, notes=found.notes,
+                   series=None, bodies=found.bodies)
 
 
 def _rate_from_times(table: pd.DataFrame) -> float:
@@ -649,7 +369,16 @@ def analyze_tracks(
     rules = rejection if rejection is not None else RejectionConfig(min_samples=5, min_range=0.0, residual_floor=0.0,
                                                                                 min_motion_ratio=0.0)
     result = rates_from_offsets(offsets[["track", "frame", "time_s", "offset_px"]], method, rules)
-    return _result(result, source=source, fps=float(fps), frames=int(table["frame"].nunique()),
-                   duration_s=float(table["time_s"].max() - table["time_s"].min()),
-                   fixation_px=(float(fixation), math.nan), method=method, rejection=rules,
-                   position_unit=position_unit, clock="fps" if given_fps else "tracks")
+    combined = result.combined
+    if combined.tracks_used == 0:
+        raise NoResultError(no_result_message(result.features))
+    verdict = judge(combined, None, combined.tracks_used)
+    weak = ("weak evidence: " + "; ".join(verdict.weak_because),) if verdict.quality == "weak" else ()
+    return Analysis(
+        source=source, fps=float(fps), frames=int(table["frame"].nunique()),
+        duration_s=float(table["time_s"].max() - table["time_s"].min()), fixation_px=(float(fixation), math.nan),
+        method=method, omega_rad_s=verdict.omega_rad_s, omega_low_rad_s=verdict.omega_low_rad_s,
+        omega_high_rad_s=verdict.omega_high_rad_s, direction=result.direction,
+        tracks_total=int(len(result.features)), tracks_used=combined.tracks_used, features=result.features,
+        offsets=result.offsets, rejection=rules, warnings=verdict.notes + weak, position_unit=position_unit,
+        verdict=verdict, clock="fps" if given_fps else "tracks")

@@ -392,11 +392,12 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
     measurement), the reported rate throughout."""
     import numpy as np
 
-    from rotrate_cli.analysis import running_rate
     from rotrate_cli.decode import FrameSource
+    from rotrate_cli.fits import running_measure
     from rotrate_cli.overlay import write_overlay
+    from rotrate_cli.series import running_rate
 
-    running = running_rate(analysis)
+    running = running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection))
     times = running["time_s"].to_numpy()
 
     def at(time_s: float) -> tuple[float, float, float]:

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rotrate_cli import axis as axes
 from rotrate_cli import rates
 from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.joint import joint_fit
@@ -58,6 +59,31 @@ def thin(tracks: pd.DataFrame, every: int) -> pd.DataFrame:
         return tracks
     first = int(tracks["frame"].min())
     return tracks[(tracks["frame"] - first) % every == 0]
+
+
+#: The paper's method differentiates positions this far apart in angle (its 16 frames at 30 fps
+#: of a car turning at 0.327 rad/s): closer, its second differences are noise (+201% at --every 1).
+PAPER_SPACING_RAD = 1.0 / 6.0
+
+
+def sample_spacing(tracks: pd.DataFrame, angle_deg: float, method: str) -> int:
+    """``--every`` when not given: 1 for the fit method; for the paper's, the frames that make
+    :data:`PAPER_SPACING_RAD` at a first rate from the tracks (the recurrence), at least 1."""
+    if method != "paper":
+        return 1
+    omega = axes.rate_from_recurrence(tracks, axes.offsets_along(tracks, (0.0, 0.0), angle_deg))
+    times = tracks.drop_duplicates("frame")["time_s"].to_numpy()
+    step_s = float(np.median(np.diff(np.sort(times)))) if len(times) > 1 else math.nan
+    if not (math.isfinite(omega) and omega > 0 and math.isfinite(step_s) and step_s > 0):
+        return 1
+    return max(1, round(PAPER_SPACING_RAD / (omega * step_s)))
+
+
+def running_measure(method: str, rejection: RejectionConfig):
+    """The combined rate of a table of offsets by ``method`` (``paper``, else the fit) and
+    ``rejection``: what :func:`rotrate_cli.series.running_rate` measures with."""
+    method = "paper" if method == "paper" else "fit"
+    return lambda part: rates_from_offsets(part, method, rejection).combined
 
 
 def _direction(offsets: pd.DataFrame, features: pd.DataFrame) -> str:

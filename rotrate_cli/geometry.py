@@ -1,6 +1,17 @@
-"""The geometry stage: the camera (given, from EXIF, or found from the tracks), the axis's angle
-and the fixation point (given, or found and refined from the tracks), for one body; and the checks
-of a given fixation against the axis the tracks show."""
+"""The geometry stage: camera, axis and view of one body, as one typed result (:class:`Geometry`).
+
+In three steps, so that the caller can let a long clip's tracks table go between them:
+
+1. :func:`locate`: the axis's angle (given, from the tracks' motion or from their paths' shape),
+   the camera (:mod:`rotrate_cli.camera`: given, EXIF, found or orthographic) and a first
+   fixation point (given, or found from the tracks' recurrence); the body's offsets from it.
+2. :func:`measure`: the body's rates (:mod:`rotrate_cli.fits`) with a found fixation refined
+   to the shared axis the inlier tracks turn about (with the turn speeding up where the rate
+   changes), and a given one checked against it (:func:`fixation_doubt`).
+3. :func:`settle_view`: the view read from the tracks' paths at the reported rate
+   (:mod:`rotrate_cli.view`); where that rate is the clip's repetition and the axis was to be
+   found, the paths' turning centre is the fixation.
+"""
 
 from __future__ import annotations
 
@@ -12,164 +23,174 @@ import numpy as np
 
 from rotrate_cli import axis as axes
 from rotrate_cli import rates
+from rotrate_cli.camera import Lens, camera_at, find_lens, lens_from
 from rotrate_cli.config import AnalysisConfig
+from rotrate_cli.decode import VideoInfo
 from rotrate_cli.errors import NoResultError
 from rotrate_cli.fits import JOINT_MIN_TRACKS, RateResult, changes, half_rates, rates_from_offsets, thin
-from rotrate_cli.focal import ORTHOGRAPHIC_WIDTHS, FocalEstimate, estimate_focal
+from rotrate_cli.footage import MIN_TRACKS_FOR_ANGLE
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
-from rotrate_cli.outliers import (
-    Combined,
-)
-
-#: Fewer tracks than this do not find the axis's angle from their motion: it is taken as vertical.
-MIN_TRACKS_FOR_ANGLE = 10
-
-
-#: The found lens's inverse focal length is good to about this fraction on rendered solids, more
-#: than its standard error says (the tracker's small slides near the outline bias it): found
-#: 13.3, 25.0, 28.3 and 26.8 degrees for 15, 25, 30 and 20 (a sphere: -2.0% in omega, with an
-#: interval of +-0.8% from the standard error alone).
-LENS_FLOOR = 0.35
-
+from rotrate_cli.outliers import Combined
+from rotrate_cli.view import View, view_from_paths
 
 #: A found axis about which the tracks' interval is this many times narrower than about a given
 #: fixation shows the given one to be off by more than the measurement resolves.
 SHARPER = 1.5
 
-
-def camera_model(config: AnalysisConfig, size_px: tuple[int, int], fixation_px: tuple[float, float],
-            angle_deg: float) -> rates.Camera | None:
-    """The pinhole camera (principal point at the image centre), offsets along ``angle_deg``."""
-    if config.focal_px is None and config.fov_deg is None:
-        return None
-    width_px, height_px = size_px
-    focal_px = config.focal_px if config.focal_px is not None else rates.focal_px_from_fov(config.fov_deg or 0.0,
-                                                                                           width_px)
-    ux, uy = axes.unit_offset(angle_deg)
-    axis_px = (fixation_px[0] - (width_px / 2.0 - 0.5)) * ux + (fixation_px[1] - (height_px / 2.0 - 0.5)) * uy
-    depth_scale = math.cos(math.radians(config.elevation_deg or 0.0))
-    return rates.Camera(focal_px, axis_px / focal_px, depth_scale)
+#: How the axis's angle was had (``Geometry.angle_from``): given (``--axis-angle``), from the
+#: tracks' motion or their paths' shape, or assumed vertical (too few tracks to tell).
+ANGLE_FROM = ("given", "motion", "paths", "assumed")
 
 
-def with_lens_doubt(result: RateResult, focal: FocalEstimate, fixation: tuple[float, float], angle_deg: float,
-                     config: AnalysisConfig, size_px: tuple[int, int]) -> RateResult:
-    """The result with its interval widened to hold the rates measured through the lenses at the
-    ends of the found lens's 95% interval (its inverse focal length +-1.96 standard errors, and
-    at least +-:data:`LENS_FLOOR` of it; 0 is orthographic)."""
-    rates_at_ends = []
-    half = max(1.96 * focal.inverse_focal_se, LENS_FLOOR * focal.inverse_focal)
-    lower = focal.inverse_focal - half
-    if lower < 1.0 / (ORTHOGRAPHIC_WIDTHS * size_px[0]):
-        lower = 0.0  # within its uncertainty of a lens called orthographic: the paper's model is as likely
-    for inverse in (lower, focal.inverse_focal + half):
-        lens = replace(config, focal_px=1.0 / inverse if inverse > 0 else None,
-                       fov_deg=None if inverse > 0 else config.fov_deg)
-        camera = camera_model(lens, size_px, fixation, angle_deg)
-        rates_at_ends.append(rates_from_offsets(result.offsets, config.method, config.rejection, camera)
-                             .combined.omega_rad_s)
-    combined = result.combined
-    low = float(np.nanmin([combined.omega_low_rad_s, *rates_at_ends]))
-    high = float(np.nanmax([combined.omega_high_rad_s, *rates_at_ends]))
-    return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
+@dataclass(frozen=True)
+class Geometry:
+    """Camera, axis and view of one body.
 
+    Attributes:
+        axis_angle_deg: the axis's angle in the image (0 vertical, positive: top end right).
+        angle_from: how it was had (see :data:`ANGLE_FROM`).
+        fixation_px: a point on the axis (x, y), pixels; it may lie outside the frame.
+        fixation_found: True when it was found from the tracks rather than given.
+        lens: the camera model (:class:`rotrate_cli.camera.Lens`) and where it came from.
+        elevation_deg: the camera's elevation as the tracks tell it (the paths' shape, or the
+            found lens); NaN where they were not asked.
+        view: the view read from the tracks' paths at the reported rate (the axis's elevation
+            out of the image plane, 0 side to 90 frontal; the turning centre); None until
+            :func:`settle_view`, and where too few tracks follow a turning path to tell.
+        notes: what the user should know about how these were found.
+    """
 
-def find_focal(everything: pd.DataFrame, body: PreparedBody, angle: float, config: AnalysisConfig,
-                size_px: tuple[int, int]) -> tuple[AnalysisConfig, FocalEstimate | None]:
-    """The focal length (and elevation) from the tracks, put into the configuration as if
-    given; orthographic when no perspective shows, or when too few tracks turn far enough to
-    tell (the estimate is then None)."""
-    omega = axes.rate_from_recurrence(everything, axes.offsets_along(everything, body.fixation_px, angle))
-    estimate = None
-    if math.isfinite(omega) and omega > 0:
-        estimate = estimate_focal(everything, body.fixation_px, angle, omega, size_px,
-                                  config.elevation_deg if config.elevation_deg is not None else 0.0)
-    if estimate is None or not math.isfinite(estimate.focal_px):
-        return config, estimate
-    elevation = config.elevation_deg if config.elevation_deg is not None else estimate.elevation_deg
-    return replace(config, focal_px=estimate.focal_px, elevation_deg=elevation), estimate
+    axis_angle_deg: float
+    angle_from: str
+    fixation_px: tuple[float, float]
+    fixation_found: bool
+    lens: Lens
+    elevation_deg: float = math.nan
+    view: View | None = None
+    notes: tuple[str, ...] = ()
 
-
-def method_name(config: AnalysisConfig, camera: rates.Camera | None) -> str:
-    return config.method if camera is None else f"{config.method}+pinhole(f={camera.focal_px:.1f}px)"
+    def camera(self, size_px: tuple[int, int]) -> rates.Camera | None:
+        """The pinhole camera about the fixation point, or None (orthographic)."""
+        return camera_at(self.lens, size_px, self.fixation_px, self.axis_angle_deg)
 
 
 @dataclass(frozen=True)
 class PreparedBody:
-    """One body's tracks reduced to what the rate stages need (see :func:`prepare_body`).
+    """One body's tracks reduced to what the rate stages need (see :func:`locate`).
 
     Attributes:
-        fixation_px: the fixation point (given, or found from the tracks).
         base: ``track, frame, time_s`` per sample (tracks numbered from 1).
-        offsets_px: each sample's offset from ``fixation_px``.
+        offsets_px: each sample's offset from the first fixation point.
         positions: ``x_px, y_px`` per sample while the fixation may still be refined, else None.
     """
 
-    fixation_px: tuple[float, float]
     base: pd.DataFrame
     offsets_px: np.ndarray
     positions: pd.DataFrame | None
 
 
-def prepare_body(everything: pd.DataFrame, angle: float, config: AnalysisConfig) -> PreparedBody:
-    """The fixation point (given, or found from the tracks) and the offsets from it of one
-    body's tracks (``frame, time_s, track, x_px, y_px`` sorted by track then frame). The caller
-    can drop the tracks table afterwards: nothing here refers to it.
+def axis_angle(tracks: pd.DataFrame, motion_angle_deg: float,
+               config: AnalysisConfig) -> tuple[float, str, float, tuple[str, ...]]:
+    """The axis's angle, how it was had, the camera's elevation where the paths' shape tells it
+    (NaN otherwise), and notes."""
+    if config.axis_angle_deg is not None:
+        return float(config.axis_angle_deg), "given", math.nan, ()
+    if not math.isfinite(motion_angle_deg):  # a few points' wobble says little about the axis
+        return 0.0, "assumed", math.nan, ("too few tracks to find the axis's angle: taken as vertical "
+                                          "(give --axis-angle DEG)",)
+    if config.angle_from == "paths":
+        shape = path_shape(tracks, motion_angle_deg)
+        if shape is not None:
+            return shape.angle_deg, "paths", shape.elevation_deg, ()
+        return motion_angle_deg, "motion", math.nan, ("too few tracks turned far enough to read the axis from "
+                                                      "their paths: it is found from the motion",)
+    return motion_angle_deg, "motion", math.nan, ()
+
+
+def locate(tracks: pd.DataFrame, motion_angle_deg: float, config: AnalysisConfig, info: VideoInfo,
+           seek_lens: bool) -> tuple[Geometry, PreparedBody]:
+    """Step 1 (see the module's notes). ``tracks``: ``frame, time_s, track, x_px, y_px`` of one
+    body, sorted by track then frame; the caller may let them go afterwards. ``seek_lens``: find
+    the lens from the tracks where none is given or read (it costs seconds at 720p, and a rate
+    from the clip's repetition needs no camera).
 
     Raises:
         NoResultError: the axis cannot be found from the tracks.
     """
-    if config.fixation_px is None:
-        found = axes.axis_offset_from_recurrence(everything, axes.offsets_along(everything, (0.0, 0.0), angle))
-        if not math.isfinite(found):
-            raise NoResultError("could not find the rotation axis from the motion (too little of a turn); "
-                                "give --fixation X,Y")
-        fixation = axes.point_on_axis(found, angle, everything)
-    else:
-        fixation = (float(config.fixation_px[0]), float(config.fixation_px[1]))
-    tracks = thin(everything, config.every)
+    angle, angle_from, elevation, notes = axis_angle(tracks, motion_angle_deg, config)
+    lens = lens_from(config, info)
+    if angle_from == "paths" and not math.isfinite(lens.elevation_deg):
+        lens = replace(lens, elevation_deg=elevation)
+    fixation = _first_fixation(tracks, angle, config)
+    size_px = (info.width_px, info.height_px)
+    if (seek_lens and lens.source == "orthographic" and config.find_focal and config.method == "fit"
+            and not config.points_px):
+        lens = find_lens(tracks, fixation, angle, lens, size_px)
+        if lens.estimate is not None and math.isfinite(lens.estimate.focal_px):
+            elevation = lens.estimate.elevation_deg
+    geometry = Geometry(angle, angle_from, fixation, config.fixation_px is None, lens, elevation, notes=notes)
+    return geometry, prepare_body(tracks, angle, fixation, config)
+
+
+def _first_fixation(tracks: pd.DataFrame, angle: float, config: AnalysisConfig) -> tuple[float, float]:
+    if config.fixation_px is not None:
+        return float(config.fixation_px[0]), float(config.fixation_px[1])
+    found = axes.axis_offset_from_recurrence(tracks, axes.offsets_along(tracks, (0.0, 0.0), angle))
+    if not math.isfinite(found):
+        raise NoResultError("could not find the rotation axis from the motion (too little of a turn); "
+                            "give --fixation X,Y")
+    return axes.point_on_axis(found, angle, tracks)
+
+
+def prepare_body(tracks: pd.DataFrame, angle: float, fixation: tuple[float, float],
+                 config: AnalysisConfig) -> PreparedBody:
+    """The offsets from ``fixation`` of one body's tracks (``frame, time_s, track, x_px, y_px``
+    sorted by track then frame), thinned to ``config.every``. Nothing here refers to ``tracks``
+    afterwards."""
+    thinned = thin(tracks, config.every or 1)
     base = pd.DataFrame({
-        "track": tracks["track"].to_numpy() + 1,  # features are numbered from 1, as in the paper
-        "frame": tracks["frame"].to_numpy(),
-        "time_s": tracks["time_s"].to_numpy(),
+        "track": thinned["track"].to_numpy() + 1,  # features are numbered from 1, as in the paper
+        "frame": thinned["frame"].to_numpy(),
+        "time_s": thinned["time_s"].to_numpy(),
     }, copy=False)
     # positions are kept only while the fixation may still move: keep the peak low
-    positions = tracks[["x_px", "y_px"]] if config.fixation_px is None else None
-    return PreparedBody(fixation, base, axes.offsets_along(tracks, fixation, angle), positions)
+    positions = thinned[["x_px", "y_px"]] if config.fixation_px is None else None
+    return PreparedBody(base, axes.offsets_along(thinned, fixation, angle), positions)
 
 
-def measure_body(
-    body: PreparedBody, angle: float, config: AnalysisConfig, size_px: tuple[int, int], steady: bool = False
-) -> tuple[tuple[float, float], RateResult, rates.Camera | None]:
-    """The rates of one prepared body, with its fixation refined when it was found. ``steady``:
-    the rate is known not to change (the clip repeats itself), so a spin-up is not looked for
-    (it costs two more fits: 0.4 s of the record clip's 45,000 tracks)."""
-    fixation = body.fixation_px
+def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size_px: tuple[int, int],
+            steady: bool = False) -> tuple[Geometry, RateResult]:
+    """Step 2: the body's rates, with a found fixation refined (see the module's notes).
+    ``steady``: the rate is known not to change (the clip repeats itself), so a spin-up is not
+    looked for (it costs two more fits: 0.4 s of the record clip's 45,000 tracks)."""
+    first = geometry.fixation_px
+    angle = geometry.axis_angle_deg
 
-    def measure(point: tuple[float, float]) -> tuple[RateResult, rates.Camera | None]:
-        moved = body.positions is not None and point != fixation
+    def measured(point: tuple[float, float]) -> tuple[RateResult, rates.Camera | None]:
+        moved = body.positions is not None and point != first
         offset = axes.offsets_along(body.positions, point, angle) if moved else body.offsets_px
-        offsets = body.base.assign(offset_px=offset)
-        camera = camera_model(config, size_px, point, angle)
-        return rates_from_offsets(offsets, config.method, config.rejection, camera), camera
+        camera = camera_at(geometry.lens, size_px, point, angle)
+        return rates_from_offsets(body.base.assign(offset_px=offset), config.method, config.rejection, camera), camera
 
-    result, camera = measure(fixation)
+    result, camera = measured(first)
     release_free_memory()
-    if config.fixation_px is None and config.method == "fit":
+    fixation = first
+    if geometry.fixation_found and config.method == "fit":
         # the axis is refined even where the clip's repetition gives the rate: the sense of
         # turning is the tracks' (without it, one EPFL car's sense came out wrong)
-        fixation, result, camera = _refine_fixation(result, camera, fixation, angle, measure)
+        fixation, result, camera = _refine_fixation(result, camera, fixation, angle, measured)
         change = None if steady else half_rates(result, config, camera)
         if change is not None and changes(result.combined, *change):
             # a spinning-up body: one rate for all tracks misplaces the axis; the turn's angle
             # as it speeds up (from the halves' rates) does not. Once: measuring the halves again
             # about the moved axis and moving it again diverged (rendered cylinder 2.7 -> 19 px)
-            fixation, result, camera = _refine_fixation(result, camera, fixation, angle, measure, spin_up=change)
-    return fixation, result, camera
+            fixation, result, camera = _refine_fixation(result, camera, fixation, angle, measured, spin_up=change)
+    return replace(geometry, fixation_px=(float(fixation[0]), float(fixation[1]))), result
 
 
-def fixation_doubt(result: RateResult, camera: rates.Camera | None, fixation: tuple[float, float],
-                    angle_deg: float, config: AnalysisConfig, size_px: tuple[int, int]) -> str | None:
+def fixation_doubt(result: RateResult, geometry: Geometry, config: AnalysisConfig,
+                   size_px: tuple[int, int]) -> str | None:
     """A given fixation checked against the axis the inlier tracks turn about (the shared-axis
     least squares at the measured rate, :func:`rotrate_cli.axis.refine_axis_offset`): a line
     naming the found axis point when measuring about it moves the rate outside the interval
@@ -177,16 +198,18 @@ def fixation_doubt(result: RateResult, camera: rates.Camera | None, fixation: tu
     measurement can resolve); None otherwise."""
     features = result.features
     inlier = features["inlier"].to_numpy(dtype=bool)
-    if config.method != "fit" or config.points_px or inlier.sum() < JOINT_MIN_TRACKS:
+    if geometry.fixation_found or config.method != "fit" or config.points_px or inlier.sum() < JOINT_MIN_TRACKS:
         return None
-    offsets, omega = _inliers_and_rate(result, camera)
-    shift = axes.refine_axis_offset(offsets, omega, camera)
+    offsets, omega = _inliers_and_rate(result, geometry.camera(size_px))
+    shift = axes.refine_axis_offset(offsets, omega, geometry.camera(size_px))
     if not math.isfinite(shift) or abs(shift) < 2.0:
         return None
-    ux, uy = axes.unit_offset(angle_deg)
+    ux, uy = axes.unit_offset(geometry.axis_angle_deg)
+    fixation = geometry.fixation_px
     found = (fixation[0] + shift * ux, fixation[1] + shift * uy)
     moved = offsets.assign(offset_px=offsets["offset_px"].to_numpy() - shift)  # the inliers: memory
-    again = rates_from_offsets(moved, config.method, config.rejection, camera_model(config, size_px, found, angle_deg))
+    again = rates_from_offsets(moved, config.method, config.rejection,
+                               camera_at(geometry.lens, size_px, found, geometry.axis_angle_deg))
     rate, combined = again.combined.omega_rad_s, result.combined
     width = combined.omega_high_rad_s - combined.omega_low_rad_s
     width_found = again.combined.omega_high_rad_s - again.combined.omega_low_rad_s
@@ -200,20 +223,37 @@ def fixation_doubt(result: RateResult, camera: rates.Camera | None, fixation: tu
             "--fixation auto")
 
 
-def across(angle_deg: float) -> bool:
-    """True when an axis at ``angle_deg`` is nearer horizontal than vertical in the image."""
-    return math.isfinite(angle_deg) and abs(angle_deg) > 45.0
+def settle_view(geometry: Geometry, view_tracks: pd.DataFrame, omega_rad_s: float, rate_from: str,
+                size_px: tuple[int, int]) -> Geometry:
+    """Step 3: the geometry with the view read from the tracks' paths at the reported rate. Where
+    that rate is the clip's repetition and the fixation was to be found, the found fixation is
+    the paths' turning centre: the tracks' own axis search assumes a side view (on the record
+    clip it put the spindle 380 px off; the paths' centre is 25 px off, and 37 px off where the
+    picture is cropped to leave the spindle outside it)."""
+    view = view_from_paths(view_tracks, omega_rad_s)
+    if view is None:
+        return geometry
+    changes_: dict[str, object] = {"view": view}
+    if math.isnan(geometry.elevation_deg):
+        changes_["elevation_deg"] = view.elevation_deg
+    if geometry.fixation_found and rate_from == "repetition":
+        changes_["fixation_px"] = view.centre_px
+        x, y = view.centre_px
+        if not (0 <= x <= size_px[0] - 1 and 0 <= y <= size_px[1] - 1):
+            changes_["notes"] = (*geometry.notes, f"the axis found, ({x:.0f}, {y:.0f}), lies outside the "
+                                 f"{size_px[0]}x{size_px[1]} frame")
+    return replace(geometry, **changes_)  # type: ignore[arg-type]
 
 
-def path_shape(everything: pd.DataFrame, angle: float) -> axes.PathShape | None:
+def path_shape(tracks: pd.DataFrame, angle: float) -> axes.PathShape | None:
     """The axis angle and camera elevation from the shape of the tracks' elliptical paths (see
     :func:`rotrate_cli.axis.path_shape`), at a first rate from the recurrence along the
     direction of motion ``angle``, twice (on the dinosaur photographs: -4.0 degrees from the
     motion, then -1.7, then -1.4; their axis leans -1.2); None when either cannot be had."""
     shape = None
     for _ in range(2):  # the rate along a better direction is better, and so the next direction
-        omega = axes.rate_from_recurrence(everything, axes.offsets_along(everything, (0.0, 0.0), angle))
-        found = axes.path_shape(everything, omega, min_tracks=MIN_TRACKS_FOR_ANGLE)
+        omega = axes.rate_from_recurrence(tracks, axes.offsets_along(tracks, (0.0, 0.0), angle))
+        found = axes.path_shape(tracks, omega, min_tracks=MIN_TRACKS_FOR_ANGLE)
         if found is None:
             break
         shape = found
@@ -223,7 +263,7 @@ def path_shape(everything: pd.DataFrame, angle: float) -> axes.PathShape | None:
 
 def _refine_fixation(
     result: RateResult, camera: rates.Camera | None, fixation: tuple[float, float], angle_deg: float,
-    measure: Callable[[tuple[float, float]], tuple[RateResult, rates.Camera | None]],
+    measured: Callable[[tuple[float, float]], tuple[RateResult, rates.Camera | None]],
     spin_up: tuple[Combined, Combined, float, float] | None = None,
 ) -> tuple[tuple[float, float], RateResult, rates.Camera | None]:
     """Move a found fixation point to the shared-axis least squares of the inlier tracks at the
@@ -243,7 +283,7 @@ def _refine_fixation(
         if not math.isfinite(shift) or abs(shift) < 0.02:
             break
         fixation = (fixation[0] + shift * ux, fixation[1] + shift * uy)
-        result, camera = measure(fixation)
+        result, camera = measured(fixation)
     return fixation, result, camera
 
 

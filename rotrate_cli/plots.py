@@ -13,11 +13,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rotrate_cli.analysis import Analysis, running_rate
+from rotrate_cli.analysis import Analysis
 from rotrate_cli.errors import InputError
+from rotrate_cli.fits import running_measure
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.outputs import check_output_path, replacing
 from rotrate_cli.rates import solve_two_columns
+from rotrate_cli.series import running_rate
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -123,7 +125,8 @@ def _time_panel(axes: Axes, analysis: Analysis) -> None:
     if analysis.series is not None:
         series, title = analysis.series, "omega(t) over the sliding window, with its 95% band"
     else:
-        series, title = running_rate(analysis), "omega from the start up to each time, with its 95% band"
+        series = running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection))
+        title = "omega from the start up to each time, with its 95% band"
     if analysis.rate_from == "repetition":
         # the reported rate is a whole-clip measurement: the tracks' own rates are shown beside it
         title = ("the tracks' " + title[0].lower() + title[1:] + "; dashed: the reported rate, from the clip's "

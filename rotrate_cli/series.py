@@ -115,3 +115,23 @@ def rate_series(
     return raw[list(SERIES_COLUMNS)].astype(
         {"time_s": np.float64, "omega_rad_s": np.float64, "omega_low_rad_s": np.float64,
          "omega_high_rad_s": np.float64, "tracks_used": np.int64})
+
+
+def running_rate(offsets: pd.DataFrame, measure: Callable[[pd.DataFrame], Combined],
+                 step_s: float | None = None) -> pd.DataFrame:
+    """The rate as it would have been measured up to each time: :data:`SERIES_COLUMNS` every
+    ``step_s`` (default: a twentieth of the clip, at least half a second). ``offsets``: ``track,
+    frame, time_s, offset_px``; ``measure``: the combined rate of a part of them (the analysis's
+    own rules). NaN until enough of a turn has been seen."""
+    times = offsets["time_s"].to_numpy()
+    first, last = float(times.min()), float(times.max())
+    step = step_s if step_s is not None else max(0.5, (last - first) / 20.0)
+    rows = []
+    for end in np.arange(first + step, last + step / 2, step):
+        try:
+            combined = measure(offsets[times <= end])
+        except (ValueError, IndexError):
+            combined = Combined(math.nan, math.nan, math.nan, 0)
+        rows.append((float(min(end, last)), combined.omega_rad_s, combined.omega_low_rad_s,
+                     combined.omega_high_rad_s, combined.tracks_used))
+    return pd.DataFrame(rows, columns=list(SERIES_COLUMNS))

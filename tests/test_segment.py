@@ -103,12 +103,14 @@ def test_a_group_that_measures_like_a_larger_body_is_not_a_body_of_its_own() -> 
     # body's (1.57 rad/s); within the resolution, so not reported as a second body
     from types import SimpleNamespace
 
-    from rotrate_cli.analysis import _distinct_bodies
+    from rotrate_cli.bodies import distinct_bodies
 
     def entry(omega: float, x_px: float) -> tuple:
-        return ((x_px, 360.0), SimpleNamespace(combined=SimpleNamespace(omega_rad_s=omega)), None, 100)
+        geometry = SimpleNamespace(fixation_px=(x_px, 360.0))
+        return (geometry, SimpleNamespace(combined=SimpleNamespace(omega_rad_s=omega)), 100)
 
     measured = [entry(1.57, 638.0), entry(1.27, 630.0), entry(0.5, 640.0), entry(1.57, 1000.0)]
-    kept, folded = _distinct_bodies(measured, 1.0, 0.0, 1280.0)
+    kept, folded = distinct_bodies(measured, 1.0, 0.0, 1280.0)
     assert folded == 1
-    assert [(e[1].combined.omega_rad_s, e[0][0]) for e in kept] == [(1.57, 638.0), (0.5, 640.0), (1.57, 1000.0)]
+    assert [(e[1].combined.omega_rad_s, e[0].fixation_px[0]) for e in kept] == [(1.57, 638.0), (0.5, 640.0),
+                                                                                 (1.57, 1000.0)]

@@ -1,0 +1,122 @@
+"""The camera of the geometry stage: the lens given (``--fov``/``--focal-px``), read from the
+photographs' EXIF, found from the tracks (:mod:`rotrate_cli.focal`, ``--fov auto``, the default)
+or orthographic (``--fov ortho``, the paper's model); and the pinhole model the fits use about a
+fixation point (:func:`camera_at`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from rotrate_cli import axis as axes
+from rotrate_cli import rates
+from rotrate_cli.config import AnalysisConfig
+from rotrate_cli.decode import VideoInfo
+from rotrate_cli.fits import RateResult, rates_from_offsets
+from rotrate_cli.focal import ORTHOGRAPHIC_WIDTHS, FocalEstimate, estimate_focal
+from rotrate_cli.lazy import pandas as pd
+from rotrate_cli.outliers import Combined
+
+#: The found lens's inverse focal length is good to about this fraction on rendered solids, more
+#: than its standard error says (the tracker's small slides near the outline bias it): found
+#: 13.3, 25.0, 28.3 and 26.8 degrees for 15, 25, 30 and 20 (a sphere: -2.0% in omega, with an
+#: interval of +-0.8% from the standard error alone).
+LENS_FLOOR = 0.35
+
+#: Where the camera model came from (``Lens.source``).
+CAMERA_SOURCES = ("orthographic", "given", "exif", "found")
+
+
+@dataclass(frozen=True)
+class Lens:
+    """The camera model of a measurement.
+
+    Attributes:
+        focal_px: the focal length in pixels; None for the orthographic camera.
+        elevation_deg: how far the camera looks down on the axis, degrees (0: level; the fits'
+            pinhole model uses it); NaN where nothing says.
+        source: ``orthographic`` (the paper's), ``given`` (``--fov``/``--focal-px``), ``exif``
+            (the photographs' lens) or ``found`` (from the tracks).
+        estimate: what the tracks said about the camera where it was sought; None otherwise.
+    """
+
+    focal_px: float | None
+    elevation_deg: float = math.nan
+    source: str = "orthographic"
+    estimate: FocalEstimate | None = None
+
+
+def lens_from(config: AnalysisConfig, info: VideoInfo) -> Lens:
+    """The lens given in the options, else the photographs' own (EXIF), else orthographic (to be
+    found from the tracks where ``config.find_focal``)."""
+    elevation = config.elevation_deg if config.elevation_deg is not None else math.nan
+    if config.focal_px is not None:
+        return Lens(config.focal_px, elevation, "given")
+    if config.fov_deg is not None:
+        return Lens(rates.focal_px_from_fov(config.fov_deg, info.width_px), elevation, "given")
+    if info.focal_px is not None and config.find_focal and config.method == "fit":
+        return Lens(info.focal_px, elevation, "exif")
+    return Lens(None, elevation, "orthographic")
+
+
+def camera_at(lens: Lens, size_px: tuple[int, int], fixation_px: tuple[float, float],
+              angle_deg: float) -> rates.Camera | None:
+    """The pinhole camera (principal point at the image centre) with offsets measured along
+    ``angle_deg`` from ``fixation_px``; None for the orthographic camera."""
+    if lens.focal_px is None:
+        return None
+    width_px, height_px = size_px
+    ux, uy = axes.unit_offset(angle_deg)
+    axis_px = (fixation_px[0] - (width_px / 2.0 - 0.5)) * ux + (fixation_px[1] - (height_px / 2.0 - 0.5)) * uy
+    elevation = lens.elevation_deg if math.isfinite(lens.elevation_deg) else 0.0
+    return rates.Camera(lens.focal_px, axis_px / lens.focal_px, math.cos(math.radians(elevation)))
+
+
+def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg: float, lens: Lens,
+              size_px: tuple[int, int]) -> Lens:
+    """The focal length (and elevation, unless given) found from the tracks, at a first rate from
+    their recurrence; orthographic when no perspective shows, or when too few tracks turn far
+    enough to tell (``estimate`` None)."""
+    omega = axes.rate_from_recurrence(tracks, axes.offsets_along(tracks, fixation_px, angle_deg))
+    if not (math.isfinite(omega) and omega > 0):
+        return lens
+    elevation = lens.elevation_deg if math.isfinite(lens.elevation_deg) else 0.0
+    estimate = estimate_focal(tracks, fixation_px, angle_deg, omega, size_px, elevation)
+    if estimate is None:
+        return lens
+    if not math.isfinite(estimate.focal_px):
+        return replace(lens, estimate=estimate, source="found")
+    if not math.isfinite(lens.elevation_deg):
+        elevation = estimate.elevation_deg
+    return Lens(estimate.focal_px, elevation, "found", estimate)
+
+
+def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, float], angle_deg: float,
+                    config: AnalysisConfig, size_px: tuple[int, int]) -> RateResult:
+    """The result with its interval widened to hold the rates measured through the lenses at the
+    ends of a found lens's 95% interval (its inverse focal length +-1.96 standard errors, and at
+    least +-:data:`LENS_FLOOR` of it; 0 is orthographic). As it is for any other lens."""
+    focal = lens.estimate
+    if lens.source != "found" or focal is None or lens.focal_px is None or result.combined.tracks_used == 0:
+        return result
+    rates_at_ends = []
+    half = max(1.96 * focal.inverse_focal_se, LENS_FLOOR * focal.inverse_focal)
+    lower = focal.inverse_focal - half
+    if lower < 1.0 / (ORTHOGRAPHIC_WIDTHS * size_px[0]):
+        lower = 0.0  # within its uncertainty of a lens called orthographic: the paper's model is as likely
+    for inverse in (lower, focal.inverse_focal + half):
+        end = replace(lens, focal_px=1.0 / inverse if inverse > 0 else None)
+        camera = camera_at(end, size_px, fixation_px, angle_deg)
+        rates_at_ends.append(rates_from_offsets(result.offsets, config.method, config.rejection, camera)
+                             .combined.omega_rad_s)
+    combined = result.combined
+    low = float(np.nanmin([combined.omega_low_rad_s, *rates_at_ends]))
+    high = float(np.nanmax([combined.omega_high_rad_s, *rates_at_ends]))
+    return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
+
+
+def method_name(method: str, camera: rates.Camera | None) -> str:
+    """The estimator's name as reported: ``fit``, ``paper``, or ``fit+pinhole(f=...px)``."""
+    return method if camera is None else f"{method}+pinhole(f={camera.focal_px:.1f}px)"

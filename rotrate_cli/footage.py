@@ -1,0 +1,204 @@
+"""The tracks stage: from a source to its tracked points (:func:`read_footage`).
+
+Opens the source, checks the options that depend on its frames (the region of interest, a
+fixation outside the picture), decodes it in a background thread and tracks it, keeping a
+thumbnail of each frame for the clip's repetition (:mod:`rotrate_cli.period`). Tracks again where
+the first pass says it should: through FFmpeg where OpenCV decoded lifeless frames (interlaced
+streams), and with the tracking window turned a quarter where the points move up and down the
+image. The direction of that motion is this stage's by-product: the geometry stage starts from it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from rotrate_cli import axis as axes
+from rotrate_cli.chosen import follow_points
+from rotrate_cli.config import AnalysisConfig
+from rotrate_cli.csrt import CsrtTracker, csrt_settings
+from rotrate_cli.decode import FrameSource, VideoInfo, prefetch
+from rotrate_cli.errors import InputError, NoResultError
+from rotrate_cli.fits import no_result_message
+from rotrate_cli.lazy import pandas as pd
+from rotrate_cli.memory import release_free_memory
+from rotrate_cli.period import Thumbnails
+from rotrate_cli.tracking import (
+    VIDEO_BLUR_SIGMA_PX,
+    TrackerConfig,
+    TrackingRun,
+    track_frames,
+    tracking_image,
+    tracking_scale,
+)
+
+#: Progress callback: (frames done, frames expected or None).
+ProgressCallback = Callable[[int, int | None], None]
+
+#: A run whose frames are this often black, or the same as the one before pixel for pixel, got
+#: nothing from its decoder (see :meth:`rotrate_cli.period.Thumbnails.lifeless_fraction`).
+LIFELESS = 0.5
+
+#: Fewer tracks than this do not find the axis's angle from their motion: it is taken as vertical.
+MIN_TRACKS_FOR_ANGLE = 10
+
+_INTERLACED_HINT = ("if the video shows motion, it is probably interlaced (camcorder, broadcast, DV), which this "
+                    "OpenCV cannot decode: deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4) or pip install "
+                    "'rotrate[ffmpeg]'")
+
+
+@dataclass(frozen=True)
+class Footage:
+    """What the tracks stage hands on.
+
+    Attributes:
+        info: the source's size, clock and lens (:class:`rotrate_cli.decode.VideoInfo`).
+        tracks: ``frame, time_s, track, x_px, y_px`` sorted by track then frame (tracks from 0).
+        thumbnails: a small grey picture of each frame, for the clip's repetition.
+        frames: frames analysed.
+        duration_s: time from the first to the last analysed frame, seconds.
+        motion_angle_deg: the axis's angle in the image as the tracks' motion shows it (the
+            principal direction of all their steps, :func:`rotrate_cli.axis.motion_angle_deg`);
+            the given ``--axis-angle`` where there is one; NaN where too few tracks
+            (:data:`MIN_TRACKS_FOR_ANGLE`) tell.
+        warnings: what the user should know from decoding and tracking.
+    """
+
+    info: VideoInfo
+    tracks: pd.DataFrame
+    thumbnails: Thumbnails
+    frames: int
+    duration_s: float
+    motion_angle_deg: float
+    warnings: tuple[str, ...] = ()
+
+
+def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None = None) -> Footage:
+    """Decode and track ``source`` between ``config.start_s`` and ``config.end_s``.
+
+    Raises:
+        InputError: the source cannot be read, has too few frames, or an option does not fit it.
+        NoResultError: nothing could be tracked.
+    """
+    video = FrameSource(source, fps=config.fps,
+                        times_s=None if config.times_s is None else np.asarray(config.times_s, dtype=np.float64))
+    info = video.info
+    warnings = list(video.warnings) + _check_against_frames(config, info)
+    tracker = config.tracker
+    if config.axis_angle_deg is not None and across(config.axis_angle_deg):
+        tracker = turned(tracker)
+    thumbnails = Thumbnails()
+    run = _track(video, config, tracker, progress, thumbnails)
+    if run.frames == 0:
+        raise InputError(f"no frame of {source} lies between --start and --end")
+    if run.frames < 3:
+        raise InputError(f"{source} has only {run.frames} frame(s) to analyse; rotation needs at least 3")
+    if run.tracks.empty and thumbnails.lifeless_fraction() >= LIFELESS and video.use_ffmpeg():
+        # OpenCV's trouble with interlaced streams: black frames, or one frozen garbled picture;
+        # it strikes some openings of a file and not others, so it is caught here too
+        thumbnails.clear()
+        run = _track(video, config, tracker, progress, thumbnails)
+    _check_tracked(run, thumbnails, source)
+    tracks = by_track(run.tracks)
+    release_free_memory()  # the tracker's store and the frames' buffers are gone
+    angle = config.axis_angle_deg if config.axis_angle_deg is not None else math.nan
+    if config.axis_angle_deg is None and tracks["track"].nunique() >= MIN_TRACKS_FOR_ANGLE:
+        angle = axes.motion_angle_deg(tracks)
+        if across(angle):
+            # the motion runs up and down the image: track again with the window turned to suit it
+            thumbnails.clear()
+            run = _track(video, config, turned(tracker), progress, thumbnails)
+            if run.tracks.empty:
+                raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
+            tracks = by_track(run.tracks)
+            angle = axes.motion_angle_deg(tracks)
+        angle = angle if math.isfinite(angle) else 0.0
+    # the decoder may have learnt something while it read (a stream OpenCV decodes black)
+    warnings += [warning for warning in video.warnings if warning not in warnings]
+    notes = list(run.notes) + warnings
+    if config.start_s == 0 and config.end_s is None:
+        short = video.shortfall(run.frames, run.last_time_s)
+        if short is not None:
+            notes.append(short)
+    return Footage(info, tracks, thumbnails, run.frames, run.last_time_s - run.first_time_s, float(angle),
+                   tuple(notes))
+
+
+def _check_against_frames(config: AnalysisConfig, info: VideoInfo) -> list[str]:
+    """Options that must fit the frames: an error for a region outside them, a warning for a
+    fixation outside them."""
+    notes = []
+    if config.fixation_px is not None:
+        fx, fy = config.fixation_px
+        if not (math.isfinite(fx) and math.isfinite(fy)):
+            raise InputError("--fixation must be two numbers X,Y in pixels, or auto")
+        if not (0 <= fx <= info.width_px - 1 and 0 <= fy <= info.height_px - 1):
+            # a record player's spindle seen close up lies outside the picture: measured, but said
+            notes.append(f"the fixation ({fx:g}, {fy:g}) lies outside the {info.width_px}x{info.height_px} "
+                         "frame; check it, or use --fixation auto")
+    roi = config.tracker.roi
+    if roi is not None and (
+        roi.width_px <= 0 or roi.height_px <= 0 or roi.x_px < 0 or roi.y_px < 0
+        or roi.x_px + roi.width_px > info.width_px or roi.y_px + roi.height_px > info.height_px
+    ):
+        raise InputError(f"--roi must be X,Y,W,H inside the {info.width_px}x{info.height_px} frame")
+    return notes
+
+
+def _check_tracked(run: TrackingRun, thumbnails: Thumbnails, source: str | Path) -> None:
+    """Nothing tracked: say why, as far as the frames tell."""
+    if not run.tracks.empty:
+        return
+    if thumbnails.black_fraction() >= LIFELESS:
+        raise InputError(f"the frames of {source} decode black: {_INTERLACED_HINT}")
+    if thumbnails.lifeless_fraction() >= LIFELESS:
+        raise NoResultError("no point could be tracked: the picture does not change from frame to frame; "
+                            + _INTERLACED_HINT)
+    raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
+
+
+def across(angle_deg: float) -> bool:
+    """True when an axis at ``angle_deg`` is nearer horizontal than vertical in the image."""
+    return math.isfinite(angle_deg) and abs(angle_deg) > 45.0
+
+
+def by_track(tracks: pd.DataFrame) -> pd.DataFrame:
+    """``tracks`` sorted by track then frame (the tracker hands them over so: then as they are)."""
+    track, frame = tracks["track"].to_numpy(), tracks["frame"].to_numpy()
+    step = np.diff(track)
+    if ((step > 0) | ((step == 0) & (np.diff(frame) > 0))).all():
+        return tracks
+    return tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True)
+
+
+def turned(tracker: TrackerConfig) -> TrackerConfig:
+    """The tracker with its window turned a quarter: narrow across the motion again (see
+    :class:`rotrate_cli.tracking.TrackerConfig`) when points move up and down the image."""
+    return replace(tracker, win_width_px=tracker.win_height_px, win_height_px=tracker.win_width_px)
+
+
+def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
+           progress: ProgressCallback | None, thumbnails: Thumbnails) -> TrackingRun:
+    """Decode (in a background thread) and track the frames of ``video`` between start and end,
+    keeping a thumbnail of each in ``thumbnails``."""
+    info = video.info
+    scale = tracking_scale(info.width_px, tracker)
+    blur = tracker.blur_sigma_px
+    if blur is None:
+        blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
+    # the luma table is known once the stream has read (and checked) its first frame
+    frames = video.frames(config.start_s, config.end_s, grey=True, map_luma=False,
+                          transform=lambda image: tracking_image(image, scale, blur, video.luma_levels()))
+    expected = info.frame_count
+    notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
+    size_px = (info.width_px, info.height_px)
+    stream = thumbnails.tap(prefetch(frames))
+    if config.points_px:
+        return follow_points(stream, size_px, list(config.points_px), config.tracker_kind, tracker, notify)
+    if config.tracker_kind == "csrt":
+        return track_frames(stream, size_px, csrt_settings(tracker), notify, kind=CsrtTracker)
+    return track_frames(stream, size_px, tracker, notify)
