@@ -101,3 +101,52 @@ def test_a_long_clips_store_keeps_every_other_track_once_full() -> None:
     assert table["frame"].min() == 0 and table["frame"].max() == 99  # the whole clip, not its start
     first = table[table["track"] == 0]
     assert list(first["frame"]) == list(range(10)) and (first["x_px"] == 0).all()
+
+
+def _steps_on_paths(turn_rad: float, views: tuple[float, ...], jitter_px: float = 0.0,
+                    seed: int = 0) -> list[np.ndarray]:
+    """Four frames of positions of points turning ``turn_rad`` a frame on ellipses of 40-150 px
+    (aspect ``sin(view)``: 0 a side view, 1 face on), as the tracker's steps."""
+    rng = np.random.default_rng(seed)
+    positions = []
+    for view in views:
+        for _ in range(20):
+            radius, phase, centre = rng.uniform(40, 150), rng.uniform(0, 2 * np.pi), rng.uniform(100, 500, 2)
+            angle = phase + turn_rad * np.arange(4)
+            path = np.stack([centre[0] + radius * np.cos(angle), centre[1] + radius * np.sin(view) * np.sin(angle)], 1)
+            positions.append(path + rng.normal(0, jitter_px, path.shape))
+    track = np.array(positions)  # points x frames x 2
+    return [track[:, 1] - track[:, 0], track[:, 2] - track[:, 1], track[:, 3] - track[:, 2]]
+
+
+@pytest.mark.parametrize("views", [(0.0,), (np.pi / 2,), (0.0, 0.4, 1.2)])
+def test_the_shared_turn_is_read_from_the_steps_in_any_view(views: tuple[float, ...]) -> None:
+    from rotrate_cli.tracking import _TurnEstimate
+
+    turn = _TurnEstimate()
+    before, middle, step = _steps_on_paths(np.radians(10), views)
+    turn.add(step.astype(np.float32), middle.astype(np.float32), before.astype(np.float32))
+    assert np.degrees(np.arccos(turn.k)) == pytest.approx(10.0, abs=0.05)
+
+
+def test_slow_jittery_points_do_not_make_a_turn() -> None:
+    # a point stepping a pixel or two a frame: its jitter, shared by consecutive steps, would read
+    # as a fast turn (a JPEG-compressed box turning 0.9 degrees a frame read 27 degrees)
+    from rotrate_cli.tracking import _TurnEstimate
+
+    turn = _TurnEstimate()
+    before, middle, step = _steps_on_paths(np.radians(0.9), (0.0,), jitter_px=0.4)
+    turn.add(step.astype(np.float32), middle.astype(np.float32), before.astype(np.float32))
+    assert np.isnan(turn.k)  # nothing said: the straight-line step is used
+
+
+def test_tracks_hold_on_a_turn_of_15_degrees_a_frame() -> None:
+    # a rendered cylinder turning 15 degrees a frame (a point is in view for 12 frames): the
+    # tracks follow the turn, and the points stepping far are predicted on their paths
+    scene = SceneConfig(shape="cylinder", omega_rad_s=np.radians(15) * 30, duration_s=0.7, width_px=640,
+                        height_px=360, supersample=1, seed=8)
+    renderer = Renderer(scene)
+    frames = [Frame(k, k / scene.fps, tracking_image(renderer.render(k), 1.0, 1.0)) for k in range(scene.frame_count)]
+    tracks = track_frames(frames, (scene.width_px, scene.height_px), TrackerConfig()).tracks
+    lengths = tracks.groupby("track").size()
+    assert (lengths >= 8).sum() >= 25  # 31 here (27 with the straight-line step alone)
