@@ -279,6 +279,7 @@ class CornerTracker:
         self._velocity = np.empty((0, 2), np.float32)  # last displacement per frame, for prediction
         self._step_before = np.empty((0, 2), np.float32)  # the displacement before that (0: not yet known)
         self._turn = _TurnEstimate()
+        self._straight_k = math.cos(STRAIGHT_RAD)
         self._anchor = np.empty((0, 2), np.float32)  # where each point stood static_window_s ago
         self._anchor_time = np.empty(0, np.float64)
         self._next_id = 0
@@ -330,14 +331,17 @@ class CornerTracker:
     def _predicted_steps(self) -> np.ndarray:
         """Each live point's expected step into the next frame (see :class:`_TurnEstimate`): on its
         path's turn where its last two steps are known, its last step where one is, else none."""
-        steps = self._velocity.copy()
         k = self._turn.k
         # only on fast turns (STRAIGHT_RAD a frame) and for points that step far (FAST_STEP_PX):
         # elsewhere the straight line misses by less than the base level's reach, and the
         # difference is the tracker's jitter (a JPEG-compressed clip's estimate moved by it)
-        if math.isfinite(k) and k < math.cos(STRAIGHT_RAD):
-            fast = np.any(self._step_before != 0, axis=1) & (np.linalg.norm(self._velocity, axis=1) >= FAST_STEP_PX)
-            steps[fast] = 2.0 * k * self._velocity[fast] - self._step_before[fast]
+        if not (k < self._straight_k):  # NaN too
+            return self._velocity
+        velocity, before = self._velocity, self._step_before
+        fast = (before[:, 0] != 0) | (before[:, 1] != 0)
+        fast &= np.einsum("ij,ij->i", velocity, velocity) >= FAST_STEP_PX ** 2
+        steps = velocity.copy()
+        steps[fast] = 2.0 * k * velocity[fast] - before[fast]
         return steps
 
     def _keep(self, keep: np.ndarray) -> None:
