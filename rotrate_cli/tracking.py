@@ -13,7 +13,6 @@ where ``x_px`` is the image column and ``y_px`` the image row.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
@@ -22,7 +21,6 @@ import numpy as np
 
 from rotrate_cli.decode import Frame
 from rotrate_cli.lazy import pandas as pd
-from rotrate_cli.stats import weighted_median
 
 KNOWN_LEVELS = 0
 #: Lucas-Kanade stopping rule (iterations, last step in px) of the forward pass, which gives the
@@ -277,9 +275,6 @@ class CornerTracker:
         self._points = np.empty((0, 2), np.float32)
         self._ids = np.empty(0, np.int32)
         self._velocity = np.empty((0, 2), np.float32)  # last displacement per frame, for prediction
-        self._step_before = np.empty((0, 2), np.float32)  # the displacement before that (0: not yet known)
-        self._turn = _TurnEstimate()
-        self._straight_k = math.cos(STRAIGHT_RAD)
         self._anchor = np.empty((0, 2), np.float32)  # where each point stood static_window_s ago
         self._anchor_time = np.empty(0, np.float64)
         self._next_id = 0
@@ -319,36 +314,11 @@ class CornerTracker:
             & (moved[:, 0] <= width - 1)
             & (moved[:, 1] <= height - 1)
         )
-        step = (moved - self._points)[keep]
-        self._turn.add(step, self._velocity[keep], self._step_before[keep])
-        self._step_before = self._velocity[keep]
-        self._velocity = step
+        self._velocity = (moved - self._points)[keep]
         self._points = moved[keep]
         self._ids = self._ids[keep]
         self._anchor = self._anchor[keep]
         self._anchor_time = self._anchor_time[keep]
-
-    def _predicted_steps(self) -> np.ndarray:
-        """Each live point's expected step into the next frame (see :class:`_TurnEstimate`): on its
-        path's turn where its last two steps are known, its last step where one is, else none."""
-        k = self._turn.k
-        # only on fast turns (STRAIGHT_RAD a frame) and for points that step far (FAST_STEP_PX):
-        # elsewhere the straight line misses by less than the base level's reach, and the
-        # difference is the tracker's jitter (a JPEG-compressed clip's estimate moved by it)
-        if not (k < self._straight_k):  # NaN too
-            return self._velocity
-        velocity, before = self._velocity, self._step_before
-        fast = (before[:, 0] != 0) | (before[:, 1] != 0)
-        fast &= np.einsum("ij,ij->i", velocity, velocity) >= FAST_STEP_PX ** 2
-        steps = velocity.copy()
-        steps[fast] = 2.0 * k * velocity[fast] - before[fast]
-        return steps
-
-    def _keep(self, keep: np.ndarray) -> None:
-        """Keep only these live points (booleans), in every per-point array."""
-        self._points, self._ids, self._velocity = self._points[keep], self._ids[keep], self._velocity[keep]
-        self._step_before = self._step_before[keep]
-        self._anchor, self._anchor_time = self._anchor[keep], self._anchor_time[keep]
 
     def _drop_static(self, time_s: float) -> None:
         due = time_s - self._anchor_time >= self.config.static_window_s
@@ -362,7 +332,9 @@ class CornerTracker:
         moving_due = due & ~static
         self._anchor[moving_due] = self._points[moving_due]
         self._anchor_time[moving_due] = time_s
-        self._keep(~static)
+        keep = ~static
+        self._points, self._ids, self._velocity = self._points[keep], self._ids[keep], self._velocity[keep]
+        self._anchor, self._anchor_time = self._anchor[keep], self._anchor_time[keep]
 
     def _update_activity(self, grey: np.ndarray, time_s: float) -> np.ndarray | None:
         """Refresh the map of recently changed pixels; returns it as a 0/255 mask (None at first).
@@ -398,7 +370,9 @@ class CornerTracker:
         y0, y1 = np.clip(y - half_h, 0, height), np.clip(y + half_h + 1, 0, height)
         count = integral[y1, x1] - integral[y0, x1] - integral[y1, x0] + integral[y0, x0]
         area = np.maximum((x1 - x0) * (y1 - y0), 1)
-        self._keep(count / area <= self.config.max_static_fraction)
+        keep = count / area <= self.config.max_static_fraction
+        self._points, self._ids, self._velocity = self._points[keep], self._ids[keep], self._velocity[keep]
+        self._anchor, self._anchor_time = self._anchor[keep], self._anchor_time[keep]
 
     def _near_points(self) -> np.ndarray:
         """Boolean image: pixels within ``min_distance_px`` of a live point (no seeding there)."""
@@ -452,7 +426,6 @@ class CornerTracker:
         self._points = np.vstack([self._points, corners])
         self._ids = np.concatenate([self._ids, new_ids])
         self._velocity = np.vstack([self._velocity, np.zeros_like(corners)])
-        self._step_before = np.vstack([self._step_before, np.zeros_like(corners)])
         self._anchor = np.vstack([self._anchor, corners])
         self._anchor_time = np.concatenate([self._anchor_time, np.full(len(corners), time_s)])
 
@@ -486,16 +459,15 @@ class KltTracker(CornerTracker):
         return moved.reshape(-1, 2), status.ravel()
 
     def _move(self, grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        # Points with a known step start from their predicted position (:meth:`_predicted_steps`),
-        # close to the answer, so the base level suffices; new points search the full pyramid.
+        # Points with a known velocity start from a constant-velocity prediction, close to the
+        # answer, so one pyramid level above the base suffices; new points search the full pyramid.
         # The backward pass starts from the same prediction reversed, independent of the forward
         # answer, so a wrong forward match is not confirmed by starting next to it.
-        predicted = self._predicted_steps()
         known = np.any(self._velocity != 0, axis=1)
         if known.all():  # most frames: one pass each way for all points, no regrouping
-            points = self._points
-            moved, status = self._flow(self._prev, grey, points, points + predicted, KNOWN_LEVELS)
-            back, status_back = self._flow(grey, self._prev, moved, moved - predicted, KNOWN_LEVELS, backward=True)
+            points, velocity = self._points, self._velocity
+            moved, status = self._flow(self._prev, grey, points, points + velocity, KNOWN_LEVELS)
+            back, status_back = self._flow(grey, self._prev, moved, moved - velocity, KNOWN_LEVELS, backward=True)
         else:
             moved = np.empty_like(self._points)
             status = np.zeros(len(self._points), np.uint8)
@@ -504,64 +476,13 @@ class KltTracker(CornerTracker):
             for group, levels in ((known, KNOWN_LEVELS), (~known, self.config.pyramid_levels)):
                 if not group.any():
                     continue
-                points, step = self._points[group], predicted[group]
-                moved[group], status[group] = self._flow(self._prev, grey, points, points + step, levels)
+                points, velocity = self._points[group], self._velocity[group]
+                moved[group], status[group] = self._flow(self._prev, grey, points, points + velocity, levels)
                 back[group], status_back[group] = self._flow(grey, self._prev, moved[group],
-                                                             moved[group] - step, levels, backward=True)
+                                                             moved[group] - velocity, levels, backward=True)
         round_trip_px = np.linalg.norm(back - self._points, axis=1)
         keep = (status == 1) & (status_back == 1) & (round_trip_px < self.config.fb_max_error_px)
         return moved, keep
-
-
-class _TurnEstimate:
-    """The turn shared by every point of a body turning at a steady rate, from their steps.
-
-    Every point of a rigid body turning about a fixed axis moves on an ellipse (the image of its
-    circle, flat in a side view, round face on) at the same rate, so each image coordinate is a
-    sinusoid of that rate plus a constant, and so are its steps between frames: three steps in a
-    row obey ``s(t+1) + s(t-1) = 2 k s(t)`` with ``k = cos(omega dt)``, one number for all points
-    and every view. Predicting the next step as ``2 k s(t) - s(t-1)`` follows the path's curve,
-    where the last step alone (``k = 1``, a straight line) misses by about ``r (omega dt)^2``:
-    3 px a frame on the record clip's label (8.5 degrees a frame), more than the base level of
-    the Lucas-Kanade search holds, which ended most of its tracks after one or two frames.
-
-    ``k`` is the weighted median over the points with three steps of the last frame
-    (weighted by their middle step's squared length: still points say nothing), and the median
-    over the last :data:`TURN_FRAMES` frames; NaN until a frame has told it.
-    """
-
-    def __init__(self) -> None:
-        self._recent: list[float] = []
-        self.k = math.nan
-
-    def add(self, step: np.ndarray, middle: np.ndarray, before: np.ndarray) -> None:
-        """One frame's new steps, with each point's two steps before them (0: unknown)."""
-        known = np.any(before != 0, axis=1)
-        if known.sum() < TURN_MIN_POINTS:
-            return
-        middle, outer = middle[known].astype(np.float64), (step[known] + before[known]).astype(np.float64)
-        weight = (middle ** 2).sum(axis=1)
-        # points that step far: where a point moves a pixel or two a frame, its jitter (shared by
-        # consecutive steps) biases k low (a JPEG-compressed box turning 0.9 degrees a frame read 27)
-        usable = weight >= FAST_STEP_PX ** 2
-        if usable.sum() < TURN_MIN_POINTS:
-            return
-        k = (middle[usable] * outer[usable]).sum(axis=1) / (2.0 * weight[usable])
-        self._recent = [*self._recent[-(TURN_FRAMES - 1):], weighted_median(np.clip(k, -1.0, 1.0), weight[usable])]
-        self.k = float(np.median(self._recent))
-
-
-#: Frames whose estimates of the shared turn are pooled (a median): a rate that changes is followed.
-TURN_FRAMES = 5
-#: Turns slower than this (rad a frame; 3 degrees) are followed by the straight-line step: its
-#: miss, ``r (omega dt)^2``, is under half a pixel on a path 150 px across.
-STRAIGHT_RAD = 0.05
-#: Points that step less than this far (tracking-image pixels a frame) are followed by the
-#: straight-line step and say nothing of the turn: their miss is under a pixel at 10 degrees a
-#: frame, and their jitter is a large part of their step.
-FAST_STEP_PX = 4.0
-#: Points with three steps that a frame needs to estimate the shared turn.
-TURN_MIN_POINTS = 5
 
 
 @dataclass(frozen=True)
