@@ -214,7 +214,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     result = replace(result, features=name_rejections(result.features, places, geometry.fixation_px,
                                                       geometry.axis_angle_deg, result.combined.omega_rad_s,
                                                       result.offsets))
-    checked = check_rate(result, geometry, config, size_px, view_tracks, repeating=period is not None)
+    checked = check_rate(result, geometry, config, size_px, view_tracks, repeating=period is not None,
+                         clock_resolution_s=footage.info.clock_resolution_s)
     if checked.result.combined.tracks_used == 0 and period is not None:
         return _repetition_only(footage, period, config, kept, view_tracks, checked.result, geometry)
     series = None

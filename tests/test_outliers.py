@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
+import pytest
 
 from rotrate_cli import rates
 from rotrate_cli.outliers import RejectionConfig, combine, judge_fits
@@ -54,3 +57,44 @@ def test_interval_widens_when_tracks_disagree_beyond_their_errors(rng: np.random
     omega = 0.5 + rng.normal(0, 0.02, 20)  # true scatter 0.02, claimed errors 0.001
     result = combine(omega, np.full(20, 0.001))
     assert result.omega_high_rad_s - result.omega_low_rad_s > 2 * 1.96 * 0.02 / np.sqrt(20) * 0.6
+
+
+def _result_with_sides(left_rate: float, right_rate: float, per_side: int = 6):
+    """A rate result whose inlier tracks lie left (offsets < 0) and right of the axis."""
+    import pandas as pd
+
+    from rotrate_cli.fits import RateResult
+    from rotrate_cli.outliers import Combined
+
+    rows, offsets = [], []
+    for k in range(2 * per_side):
+        left = k < per_side
+        rows.append({"track": k + 1, "omega_rad_s": (left_rate if left else right_rate) * (1 + 0.002 * (k % 3)),
+                     "omega_se_rad_s": 0.001, "inlier": True})
+        offsets += [{"track": k + 1, "offset_px": (-50.0 if left else 50.0) + d} for d in (-10.0, 0.0, 10.0)]
+    combined = Combined((left_rate + right_rate) / 2, 0.9 * left_rate, 1.1 * right_rate, 2 * per_side)
+    return RateResult(pd.DataFrame(offsets), pd.DataFrame(rows), combined, "ccw")
+
+
+def test_tracks_either_side_of_the_axis_must_agree() -> None:
+    from rotrate_cli.doubts import sides_disagree
+
+    assert sides_disagree(_result_with_sides(0.50, 0.50)) is None
+    doubt = sides_disagree(_result_with_sides(0.46, 0.50))  # 8% apart, each side tight
+    assert doubt is not None and "either side of the axis" in doubt
+    assert sides_disagree(_result_with_sides(0.46, 0.50, per_side=2)) is None  # too few to tell
+
+
+def test_a_coarse_clock_widens_the_tracks_interval() -> None:
+    import pandas as pd
+
+    from rotrate_cli.doubts import with_clock_doubt
+    from rotrate_cli.fits import RateResult
+    from rotrate_cli.outliers import Combined
+
+    offsets = pd.DataFrame({"track": [1] * 31, "time_s": np.arange(31.0), "offset_px": np.zeros(31)})
+    result = RateResult(offsets, pd.DataFrame(), Combined(0.1, 0.099, 0.101, 20), "ccw")
+    widened = with_clock_doubt(result, 1.0).combined  # whole seconds over 30 s: +-3.3%
+    assert widened.omega_low_rad_s == pytest.approx(0.1 - math.hypot(0.001, 0.1 / 30), rel=1e-9)
+    assert widened.omega_high_rad_s == pytest.approx(0.1 + math.hypot(0.001, 0.1 / 30), rel=1e-9)
+    assert with_clock_doubt(result, 0.0).combined == result.combined  # a video's clock

@@ -117,3 +117,28 @@ def test_verdict_prefers_the_repetition_when_the_tracks_disagree_far() -> None:
 
 def _arrays(thumbnails: Thumbnails) -> tuple[np.ndarray, np.ndarray]:
     return thumbnails.times_s, thumbnails.images
+
+
+def _single_closing(excess: float, frames: int = 50, lag_frames: float = 49.0):
+    """A repetition seen once: a clip of ``frames`` photographs whose last comes back to the
+    first after ``lag_frames`` (period 49 s at 1 frame/s)."""
+    from rotrate_cli.period import Period
+
+    return Period(49.0, 48.5, 49.5, 1, frames, 0.2, 0.9, 0.0, excess, lag_frames)
+
+
+def test_a_single_inexact_return_of_the_picture_is_not_a_sure_turn() -> None:
+    # a car half a turn on looks like itself: the picture comes back once, not exactly
+    alike = judge(None, _single_closing(excess=0.25))
+    assert alike.quality == "weak" and "comes back only once" in alike.weak_because[0]
+    exact = judge(None, _single_closing(excess=0.03))  # a turntable's full turn of photographs
+    assert exact.quality == "good"
+    # tracks that turn under two thirds of a turn in the period doubt even an exact return...
+    slow_tracks = Combined(0.05, 0.045, 0.06, 20)  # a turn in 49 s is 0.128 rad/s
+    doubted = judge(slow_tracks, _single_closing(excess=0.03), 20)
+    assert doubted.quality == "weak" and "under 67% of a turn" in doubted.weak_because[0]
+    # ...and informative tracks that agree settle it
+    agreeing = Combined(0.127, 0.124, 0.130, 20)
+    assert judge(agreeing, _single_closing(excess=0.25), 20).quality == "good"
+    # a clip that holds several returns is not doubted so (the wheel: 5 turns, matched once)
+    assert judge(slow_tracks, _single_closing(excess=0.25, frames=250), 20).quality == "good"
