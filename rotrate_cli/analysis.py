@@ -31,6 +31,7 @@ from rotrate_cli.fits import (
     RateResult,
     no_result_message,
     rates_from_offsets,
+    running_measure,
     sample_rates,
     sample_spacing,
     thin,
@@ -42,6 +43,7 @@ from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import FEATURE_COLUMNS, Combined, RejectionConfig
 from rotrate_cli.period import Period, find_period
+from rotrate_cli.rates import Camera
 from rotrate_cli.reasons import name_rejections, track_places
 from rotrate_cli.segment import Body
 from rotrate_cli.series import rate_series
@@ -98,6 +100,8 @@ class Analysis:
         view: the view read from the tracks' paths at the reported rate (the axis's elevation
             out of the image plane, the turning centre; :mod:`rotrate_cli.view`), or None where
             too few tracks follow a turning path to tell.
+        camera: the pinhole model the tracks' rates were measured through, or None
+            (orthographic).
 
     ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
     a long clip's table is large, and most reports do not need it.
@@ -134,6 +138,7 @@ class Analysis:
     clock: str = "container"
     camera_from: str = "orthographic"
     view: View | None = None
+    camera: Camera | None = None
 
     @property
     def quality(self) -> str:
@@ -220,9 +225,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         return _repetition_only(footage, period, config, kept, view_tracks, checked.result, geometry)
     series = None
     if config.window_s is not None:
-        camera = geometry.camera(size_px)
         series = rate_series(checked.result.offsets, config.window_s,
-                             lambda part: rates_from_offsets(part, config.method, config.rejection, camera).combined)
+                             running_measure(config.method, config.rejection, geometry.camera(size_px)))
     return _result(footage, config, geometry, checked, period, view_tracks, series=series, tracks=kept)
 
 
@@ -276,7 +280,8 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         axis_angle_from=geometry.angle_from if geometry.angle_from in ("motion", "paths") else config.angle_from,
         elevation_deg=geometry.elevation_deg, verdict=verdict, period=period, clock=footage.info.clock,
         camera_from=geometry.lens.source, view=geometry.view,
-        **{"method": _method_name(config.method, geometry, size_px), "focal": geometry.lens.estimate, **extra},
+        **{"method": _method_name(config.method, geometry, size_px), "focal": geometry.lens.estimate,
+           "camera": geometry.camera(size_px), **extra},
     )
 
 

@@ -397,7 +397,7 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
     from rotrate_cli.overlay import write_overlay
     from rotrate_cli.series import running_rate
 
-    running = running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection))
+    running = running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection, analysis.camera))
     times = running["time_s"].to_numpy()
 
     def at(time_s: float) -> tuple[float, float, float]:

@@ -125,7 +125,7 @@ def _time_panel(axes: Axes, analysis: Analysis) -> None:
     if analysis.series is not None:
         series, title = analysis.series, "omega(t) over the sliding window, with its 95% band"
     else:
-        series = running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection))
+        series = running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection, analysis.camera))
         title = "omega from the start up to each time, with its 95% band"
     if analysis.rate_from == "repetition":
         # the reported rate is a whole-clip measurement: the tracks' own rates are shown beside it
