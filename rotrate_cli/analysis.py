@@ -268,6 +268,9 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     warnings = footage.warnings + geometry.notes + notes + checked.notes + verdict.notes
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
+    measured_by: dict[str, object] = {"method": _method_name(config.method, geometry, size_px),
+                                      "focal": geometry.lens.estimate, "camera": geometry.camera(size_px)}
+    measured_by.update(extra)  # the repetition alone: no camera measured anything
     return Analysis(
         source=footage.info.source, fps=footage.info.fps, frames=footage.frames, duration_s=footage.duration_s,
         fixation_px=geometry.fixation_px,
@@ -279,9 +282,7 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         axis_angle_found=geometry.angle_from in ("motion", "paths"),
         axis_angle_from=geometry.angle_from if geometry.angle_from in ("motion", "paths") else config.angle_from,
         elevation_deg=geometry.elevation_deg, verdict=verdict, period=period, clock=footage.info.clock,
-        camera_from=geometry.lens.source, view=geometry.view,
-        **{"method": _method_name(config.method, geometry, size_px), "focal": geometry.lens.estimate,
-           "camera": geometry.camera(size_px), **extra},
+        camera_from=geometry.lens.source, view=geometry.view, **measured_by,  # type: ignore[arg-type]
     )
 
 
@@ -311,7 +312,7 @@ def _repetition_only(footage: Footage, period: Period, config: AnalysisConfig, k
     note = ("no track gave a rate: the rate is the clip's repetition alone, and the sense of turning "
             f"is unknown{hint}")
     return _result(footage, config, geometry, Checked(empty), period, view_tracks, notes=(note,),
-                   method=config.method, focal=None, series=None, tracks=kept)
+                   method=config.method, focal=None, camera=None, series=None, tracks=kept)
 
 
 def _segmented(footage: Footage, config: AnalysisConfig) -> Analysis:
