@@ -81,9 +81,10 @@ def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg:
               size_px: tuple[int, int]) -> Lens:
     """The focal length (and elevation, unless given) found from the tracks, at a first rate from
     their recurrence; orthographic when no perspective shows, or when too few tracks turn far
-    enough to tell (``estimate`` None)."""
-    omega = axes.rate_from_recurrence(tracks, axes.offsets_along(tracks, fixation_px, angle_deg))
-    if not (math.isfinite(omega) and omega > 0):
+    enough to tell, or the rate changes over the clip (``estimate`` None)."""
+    offsets = axes.offsets_along(tracks, fixation_px, angle_deg)
+    omega = axes.rate_from_recurrence(tracks, offsets)
+    if not (math.isfinite(omega) and omega > 0) or _changing(tracks, offsets):
         return lens
     elevation = lens.elevation_deg if math.isfinite(lens.elevation_deg) else 0.0
     estimate = estimate_focal(tracks, fixation_px, angle_deg, omega, size_px, elevation)
@@ -94,6 +95,23 @@ def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg:
     if not math.isfinite(lens.elevation_deg):
         elevation = estimate.elevation_deg
     return Lens(estimate.focal_px, elevation, "found", estimate)
+
+
+#: Halves of the clip whose first rates (the recurrence's) differ by more than this fraction turn
+#: at a changing rate, which the lens's model (one steady rate) cannot hold: it takes the change
+#: for perspective (the spin-up sample, 0.3 + 0.15 t rad/s through an orthographic camera, found
+#: an 11-degree lens whenever its tracks changed a little).
+STEADY_FRACTION = 0.1
+
+
+def _changing(tracks: pd.DataFrame, offsets: np.ndarray) -> bool:
+    """True when the clip's halves turn at clearly different rates (see :data:`STEADY_FRACTION`)."""
+    frame = tracks["frame"].to_numpy()
+    early = frame <= np.median(frame)
+    rates = [axes.rate_from_recurrence(tracks[part], offsets[part]) for part in (early, ~early)]
+    if not all(math.isfinite(rate) and rate > 0 for rate in rates):
+        return False
+    return abs(rates[1] / rates[0] - 1.0) > STEADY_FRACTION
 
 
 def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, float], angle_deg: float,

@@ -128,3 +128,18 @@ def test_cli_fov_auto_json_and_bad_values() -> None:
         done = _rotrate("analyze", str(SAMPLES / "box_perspective.mp4"), "--fixation", "319.5,179.5", *bad)
         assert done.returncode == 2
         assert len(done.stderr.strip().splitlines()) == 1 and "Traceback" not in done.stderr
+
+
+def test_the_lens_is_not_sought_on_a_changing_rate() -> None:
+    """box_spinup.mp4 (0.3 + 0.15 t rad/s, orthographic): one steady rate is the lens model's, and a
+    spin-up read as perspective (an 11-degree lens, whenever its tracks changed a little)."""
+    from rotrate_cli import axis as axes
+    from rotrate_cli.camera import _changing
+    from rotrate_cli.footage import read_footage
+
+    for name, changing in (("box_spinup.mp4", True), ("box_perspective.mp4", False), ("box_ortho.mp4", False)):
+        footage = read_footage(SAMPLES / name, AnalysisConfig(fixation_px=(319.5, 179.5)))
+        offsets = axes.offsets_along(footage.tracks, (319.5, 179.5), footage.motion_angle_deg)
+        assert _changing(footage.tracks, offsets) is changing, name
+    spin = analyze(SAMPLES / "box_spinup.mp4", AnalysisConfig(fixation_px=(319.5, 179.5)))
+    assert spin.camera is None and spin.camera_from == "orthographic"
