@@ -161,9 +161,10 @@ def _look_alike(period: Period, tracks: Combined | None, tracks_used: int) -> st
                 "turn on) rather than a turn; a clip of two turns or more settles it")
     if (tracks is not None and tracks_used >= MIN_TRACKS and math.isfinite(tracks.omega_high_rad_s)
             and 0 < tracks.omega_high_rad_s * UNDER_TURN < omega):
-        return (f"{said}, but the tracks turn at {tracks.omega_rad_s:.4g} rad/s, under {1 / UNDER_TURN:.0%} of a "
-                f"turn in that time: it may be a view that looks alike part of a turn on (a car half a turn on); "
-                "a clip of two turns or more settles it")
+        turned = tracks.omega_rad_s * period.period_s / (2.0 * math.pi)
+        return (f"{said}, but the tracks turn only {turned:.0%} of a turn in that time ({tracks.omega_rad_s:.4g} "
+                "rad/s): it may be a view that looks alike part of a turn on (a car half a turn on); a clip of "
+                "two turns or more settles it")
     return None
 
 

@@ -136,7 +136,7 @@ def test_a_single_inexact_return_of_the_picture_is_not_a_sure_turn() -> None:
     # tracks that turn under two thirds of a turn in the period doubt even an exact return...
     slow_tracks = Combined(0.05, 0.045, 0.06, 20)  # a turn in 49 s is 0.128 rad/s
     doubted = judge(slow_tracks, _single_closing(excess=0.03), 20)
-    assert doubted.quality == "weak" and "under 67% of a turn" in doubted.weak_because[0]
+    assert doubted.quality == "weak" and "turn only 39% of a turn" in doubted.weak_because[0]
     # ...and informative tracks that agree settle it
     agreeing = Combined(0.127, 0.124, 0.130, 20)
     assert judge(agreeing, _single_closing(excess=0.25), 20).quality == "good"
