@@ -1,8 +1,8 @@
 """The tracks' rate checked before it is judged (:func:`check_rate`): by the found lens's
-uncertainty, the clock's resolution, a given fixation the tracks disagree with, a rate that changes over the clip
-or differs either side of the axis, and,
-seen obliquely or face on, the rate of the tracks' paths in both image coordinates. Each either
-widens the interval or names a doubt that makes a tracks-only result weak."""
+uncertainty, the clock's resolution, a given fixation the tracks disagree with, a rate that
+changes over the clip or differs either side of the axis, and, seen obliquely or face on, the
+rate of the tracks' paths in both image coordinates. Each either widens the interval or names a
+doubt that makes a tracks-only result weak."""
 
 from __future__ import annotations
 
