@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from rotrate_cli.bodies import measure_bodies
-from rotrate_cli.camera import lens_from
+from rotrate_cli.camera import lens_from, method_name
 from rotrate_cli.config import AnalysisConfig, check_config
 from rotrate_cli.doubts import Checked, check_rate
 from rotrate_cli.errors import InputError, NoResultError
@@ -268,8 +268,9 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     warnings = footage.warnings + geometry.notes + notes + checked.notes + verdict.notes
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
-    measured_by: dict[str, object] = {"method": _method_name(config.method, geometry, size_px),
-                                      "focal": geometry.lens.estimate, "camera": geometry.camera(size_px)}
+    camera = geometry.camera(size_px)
+    measured_by: dict[str, object] = {"method": method_name(config.method, camera), "focal": geometry.lens.estimate,
+                                      "camera": camera}
     measured_by.update(extra)  # the repetition alone: no camera measured anything
     return Analysis(
         source=footage.info.source, fps=footage.info.fps, frames=footage.frames, duration_s=footage.duration_s,
@@ -284,11 +285,6 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         elevation_deg=geometry.elevation_deg, verdict=verdict, period=period, clock=footage.info.clock,
         camera_from=geometry.lens.source, view=geometry.view, **measured_by,  # type: ignore[arg-type]
     )
-
-
-def _method_name(method: str, geometry: Geometry, size_px: tuple[int, int]) -> str:
-    camera = geometry.camera(size_px)
-    return method if camera is None else f"{method}+pinhole(f={camera.focal_px:.1f}px)"
 
 
 def _repetition_only(footage: Footage, period: Period, config: AnalysisConfig, kept: pd.DataFrame | None,
