@@ -303,3 +303,30 @@ def test_elevation_needs_the_pinhole_model() -> None:
     result = CliRunner().invoke(app, ["analyze", str(SAMPLES / "box_ortho.mp4"), "--fixation", "auto",
                                       "--fov", "ortho", "--elevation", "20"])
     assert result.exit_code == 2 and "--fov or --focal-px" in result.stderr
+
+
+def test_the_geometry_stage_is_one_typed_result() -> None:
+    """The geometry stage on its own: the camera, axis and fixation of the perspective sample, as
+    given or as found, in one Geometry; its view is read once the rate is known."""
+    from rotrate_cli.footage import read_footage
+    from rotrate_cli.geometry import locate, measure, settle_view
+    from rotrate_cli.view import keep_for_view
+
+    truth = truth_of(SAMPLES / "box_perspective.mp4")
+    given = AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), fov_deg=25.0)
+    footage = read_footage(SAMPLES / "box_perspective.mp4", given)
+    size = (footage.info.width_px, footage.info.height_px)
+    geometry, body = locate(footage.tracks, footage.motion_angle_deg, given, footage.info, seek_lens=True)
+    assert (geometry.lens.source, geometry.fixation_found, geometry.angle_from) == ("given", False, "motion")
+    assert geometry.camera(size) is not None and abs(geometry.axis_angle_deg) < 1.0
+    geometry, result = measure(body, geometry, given, size)
+    assert geometry.fixation_px == tuple(truth["fixation_px"])  # a given fixation is not moved
+    assert result.combined.omega_rad_s == pytest.approx(truth["omega_rad_s"], rel=0.01)
+    seen = settle_view(geometry, keep_for_view(footage.tracks), result.combined.omega_rad_s, "tracks", size)
+    assert seen.view is not None and seen.view.name == "side"
+
+    found = AnalysisConfig(fixation_px=None)  # the lens and the axis from the tracks
+    geometry, body = locate(footage.tracks, footage.motion_angle_deg, found, footage.info, seek_lens=True)
+    assert geometry.lens.source == "found" and geometry.fixation_found
+    geometry, _ = measure(body, geometry, found, size)
+    assert geometry.fixation_px[0] == pytest.approx(truth["fixation_px"][0], abs=3.0)
