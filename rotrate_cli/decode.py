@@ -268,6 +268,30 @@ class FrameSource:
                                  "(ffmpeg -i IN -vf yadif OUT.mp4) or pip install 'rotrate[ffmpeg]'")
         return first
 
+    def looks_undecoded(self, image: np.ndarray) -> bool:
+        """True when a video's frame (BGR or grey) looks like what OpenCV gives for an interlaced
+        stream it cannot convert, rather than a picture: black, or under half as bright as the
+        first frame (mostly black, with a garbled band). A picture that truly darkens is read again
+        through FFmpeg by a caller that asks, and comes out the same."""
+        if self._files is not None or self._first_grey is None or self._pipe is not None:
+            return False
+        grey = _grey(image)
+        first = float(self._first_grey.mean())
+        return not grey.any() or float(grey[::4, ::4].mean()) < 0.5 * first
+
+    def use_ffmpeg_if_interlaced(self) -> bool:
+        """Read the video through FFmpeg from now on where FFmpeg says its stream is interlaced,
+        which OpenCV decodes black or garbled in some openings and not others (for a caller
+        that reads a single frame and cannot judge it by the frames around it); True when
+        switched."""
+        from rotrate_cli.pipe import ffmpeg_program, interlaced
+
+        program = ffmpeg_program() if self._files is None and self._pipe is None else None
+        if program is None or not interlaced(program, self._source):
+            return False
+        self._switch_to_ffmpeg(program)
+        return True
+
     def _switch_to_ffmpeg(self, program: str) -> None:
         """Read the video through ``program`` (FFmpeg) from now on, and say so once."""
         self._pipe, self._codec = program, "PIPE"

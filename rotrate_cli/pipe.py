@@ -54,6 +54,22 @@ def piped_frames(program: str, source: str, width_px: int, height_px: int) -> It
             process.stdout.close()
 
 
+#: How FFmpeg names the field order of an interlaced picture in its stream description.
+_FIELD_ORDERS = ("(top first", "(bottom first", "(top coded first", "(bottom coded first")
+
+
+def interlaced(program: str, source: str) -> bool:
+    """True when FFmpeg describes the video's first stream as interlaced (its pixel format
+    followed by a field order, ``yuv420p(top first)``)."""
+    try:
+        described = subprocess.run([program, "-hide_banner", "-nostdin", "-i", source], capture_output=True,
+                                   text=True, errors="replace", timeout=30).stderr
+    except (OSError, subprocess.SubprocessError):
+        return False
+    video = next((line for line in described.splitlines() if " Video: " in line), "")
+    return any(order in video for order in _FIELD_ORDERS)
+
+
 def first_frame(program: str, source: str, width_px: int, height_px: int) -> np.ndarray | None:
     """The video's first frame through FFmpeg, or None when it gives none."""
     return next(piped_frames(program, source, width_px, height_px), None)

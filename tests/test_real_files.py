@@ -66,6 +66,39 @@ def test_frame_of_an_interlaced_video_is_a_picture(files: dict[str, Path], tmp_p
     assert cv2.imread(str(still)).mean() > 20  # not black
 
 
+def test_a_still_opencv_decodes_black_or_garbled_is_read_through_ffmpeg(files: dict[str, Path],
+                                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """What OpenCV gives in the openings where the interlaced stream defeats it, made to happen:
+    the still at 1 s comes mostly black from OpenCV; through FFmpeg it is the picture."""
+    from rotrate_cli.decode import FrameSource
+    from rotrate_cli.overlay import frame_at
+
+    source = FrameSource(files["interlaced.mp4"])
+    opencv_frames = FrameSource._video_frames
+
+    def garbled(self, capture, start_s, end_s, convert, quiet=False):  # noqa: ANN001, ANN202
+        for frame in opencv_frames(self, capture, start_s, end_s, convert, quiet):
+            image = frame.image.copy()
+            image[image.shape[0] // 8:] = 0  # a band of picture, the rest black
+            yield type(frame)(frame.index, frame.time_s, image)
+
+    monkeypatch.setattr(FrameSource, "_video_frames", garbled)
+    assert source.looks_undecoded(np.zeros((360, 640, 3), np.uint8))
+    still = frame_at(source, 1.0)
+    assert not source.looks_undecoded(still.image) and still.image.mean() > 20
+    assert any("read through FFmpeg" in warning for warning in source.warnings)
+
+
+def test_ffmpeg_tells_an_interlaced_stream(files: dict[str, Path]) -> None:
+    from rotrate_cli.pipe import ffmpeg_program, interlaced
+
+    program = ffmpeg_program()
+    assert program is not None
+    assert interlaced(program, str(files["interlaced.mp4"]))
+    assert not interlaced(program, str(files["h264.mp4"]))
+    assert not interlaced(program, str(SAMPLES / "box_ortho.mp4"))
+
+
 def test_interlaced_without_ffmpeg_is_measured_or_explained(files: dict[str, Path],
                                                              monkeypatch: pytest.MonkeyPatch) -> None:
     # OpenCV decodes such a file black in some openings and not in others: either the run
