@@ -13,7 +13,7 @@ from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.decode import VideoInfo
 from rotrate_cli.errors import NoResultError
 from rotrate_cli.fits import RateResult
-from rotrate_cli.geometry import Geometry, locate, measure
+from rotrate_cli.geometry import Geometry, axis_angle, locate, measure
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.segment import Body, segment_tracks, unresolved
 
@@ -43,9 +43,7 @@ def measure_bodies(tracks: pd.DataFrame, motion_angle_deg: float, config: Analys
         NoResultError: no group could be measured.
     """
     size_px = (info.width_px, info.height_px)
-    angle = motion_angle_deg if np.isfinite(motion_angle_deg) else 0.0
-    if config.axis_angle_deg is not None:
-        angle = config.axis_angle_deg
+    angle = axis_angle(tracks, motion_angle_deg, config)[0]
     ux, uy = axes.unit_offset(angle)
     extent_px = abs(size_px[0] * ux) + abs(size_px[1] * uy)
     groups = segment_tracks(tracks, axes.offsets_along(tracks, (0.0, 0.0), angle), extent_px)

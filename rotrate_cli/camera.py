@@ -102,10 +102,15 @@ def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg:
 #: for perspective (the spin-up sample, 0.3 + 0.15 t rad/s through an orthographic camera, found
 #: an 11-degree lens whenever its tracks changed a little).
 STEADY_FRACTION = 0.1
+#: The halves' rates are read from at most about this many samples (whole tracks).
+CHANGE_SAMPLES = 200_000
 
 
 def _changing(tracks: pd.DataFrame, offsets: np.ndarray) -> bool:
     """True when the clip's halves turn at clearly different rates (see :data:`STEADY_FRACTION`)."""
+    if len(tracks) > CHANGE_SAMPLES:  # whole tracks, evenly: no copy of a long clip's table
+        chosen = tracks["track"].to_numpy() % math.ceil(len(tracks) / CHANGE_SAMPLES) == 0
+        tracks, offsets = tracks[chosen], offsets[chosen]
     frame = tracks["frame"].to_numpy()
     early = frame <= np.median(frame)
     rates = [axes.rate_from_recurrence(tracks[part], offsets[part]) for part in (early, ~early)]

@@ -279,32 +279,22 @@ class FrameSource:
         first = float(self._first_grey.mean())
         return not grey.any() or float(grey[::4, ::4].mean()) < 0.5 * first
 
-    def use_ffmpeg_if_interlaced(self) -> bool:
-        """Read the video through FFmpeg from now on where FFmpeg says its stream is interlaced,
-        which OpenCV decodes black or garbled in some openings and not others (for a caller
-        that reads a single frame and cannot judge it by the frames around it); True when
-        switched."""
-        from rotrate_cli.pipe import ffmpeg_program, interlaced
-
-        program = ffmpeg_program() if self._files is None and self._pipe is None else None
-        if program is None or not interlaced(program, self._source):
-            return False
-        self._switch_to_ffmpeg(program)
-        return True
-
     def _switch_to_ffmpeg(self, program: str) -> None:
         """Read the video through ``program`` (FFmpeg) from now on, and say so once."""
         self._pipe, self._codec = program, "PIPE"
         self.warnings.append("OpenCV decodes this video's frames black or frozen (an interlaced stream: camcorder, "
                              "broadcast, DV?); it is read through FFmpeg instead, deinterlaced")
 
-    def use_ffmpeg(self) -> bool:
+    def use_ffmpeg(self, only_if_interlaced: bool = False) -> bool:
         """Read the video through FFmpeg from now on (see :mod:`rotrate_cli.pipe`), for a caller
-        that got nothing from OpenCV: True when it can be, and was not already."""
-        from rotrate_cli.pipe import ffmpeg_program
+        that got nothing from OpenCV: True when it can be, and was not already. With
+        ``only_if_interlaced``, only where FFmpeg says the stream is interlaced, which OpenCV
+        decodes black or garbled in some openings and not others (for a caller that reads a
+        single frame and cannot judge it by the frames around it)."""
+        from rotrate_cli.pipe import ffmpeg_program, interlaced
 
         program = ffmpeg_program() if self._files is None and self._pipe is None else None
-        if program is None:
+        if program is None or (only_if_interlaced and not interlaced(program, self._source)):
             return False
         self._switch_to_ffmpeg(program)
         return True

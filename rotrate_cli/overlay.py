@@ -40,7 +40,7 @@ def frame_at(source: FrameSource, time_s: float) -> Frame:
     """
     if not (math.isfinite(time_s) and time_s >= 0):
         raise InputError("--at takes a time in seconds, 0 or later")
-    source.use_ffmpeg_if_interlaced()
+    source.use_ffmpeg(only_if_interlaced=True)
     for frame in source.frames(start_s=time_s):
         # OpenCV decodes an interlaced stream black or garbled in some openings and not others,
         # and not always from the first frame (the frame command's still of the interlaced test
