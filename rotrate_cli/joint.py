@@ -162,9 +162,13 @@ def joint_fit(
     rough = _locate(misfits, weights, omega_guess_rad_s, span)
     if not math.isfinite(rough):
         return failed
+    def weighted_misfits(grid: np.ndarray) -> np.ndarray:
+        out = misfits(grid)
+        out *= weights[:, None]  # in place: a long clip's tracks x grid is megabytes
+        return out
+
     grid = _relative_grid(rough, _GRID)
-    curves = misfits(grid)
-    weighted = curves * weights[:, None]
+    weighted = weighted_misfits(grid)
     omega = float(_parabola_minimum(grid, weighted.sum(0)[None, :])[0])
     if not math.isfinite(omega):
         return failed
@@ -172,12 +176,13 @@ def joint_fit(
     if k == 1:
         # one track: the curvature of its misfit, scaled by its own residual variance
         return _single(grid, weighted[0], omega, float(tracks.counts[0]))
-    leave_one_out = _parabola_minimum(grid, weighted.sum(0)[None, :] - weighted)
+    leave_one_out = _leave_one_out(grid, weighted)
     if not np.isfinite(leave_one_out).all():
         # a track whose removal moves the minimum off the grid: a wider one
         grid = _relative_grid(omega, _WIDE_GRID)
-        weighted = misfits(grid) * weights[:, None]
-        leave_one_out = _parabola_minimum(grid, weighted.sum(0)[None, :] - weighted)
+        del weighted
+        weighted = weighted_misfits(grid)
+        leave_one_out = _leave_one_out(grid, weighted)
     finite = leave_one_out[np.isfinite(leave_one_out)]
     if len(finite) < 2:
         return Combined(omega, math.nan, math.nan, k)
@@ -194,7 +199,8 @@ def joint_fit(
         for wider in (False, True):
             if wider:
                 grid = _relative_grid(omega, _WIDE_GRID)
-                weighted = misfits(grid) * weights[:, None]
+                del weighted
+                weighted = weighted_misfits(grid)
             estimates = [_delete_one_group(grid, weighted, split) for split in groups]
             if all(np.isfinite(e).all() for e in estimates):
                 half = max(half, *(_jackknife_half_width(e) for e in estimates))
@@ -209,6 +215,18 @@ def _jackknife_half_width(estimates: np.ndarray) -> float:
     m = len(estimates)
     se = math.sqrt((m - 1) / m * float(((estimates - estimates.mean()) ** 2).sum()))
     return student_t_975(m - 1) * se
+
+
+#: Tracks per chunk of the delete-one-track minima (bounds their temporaries' memory).
+_CHUNK_TRACKS = 1024
+
+
+def _leave_one_out(grid: np.ndarray, weighted: np.ndarray) -> np.ndarray:
+    """The joint minimum with each track (row of ``weighted``) left out in turn (NaN where off
+    ``grid``), a chunk of tracks at a time rather than as one more tracks x grid array."""
+    total = weighted.sum(0)[None, :]
+    return np.concatenate([_parabola_minimum(grid, total - weighted[start:start + _CHUNK_TRACKS])
+                           for start in range(0, len(weighted), _CHUNK_TRACKS)])
 
 
 def _delete_one_group(grid: np.ndarray, weighted: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:

@@ -207,7 +207,7 @@ def fit_samples(samples: pd.DataFrame, omega_rad_s: dict[int, float]) -> pd.Data
 
 
 #: Elements per padded batch in :func:`fit_tracks`: bounds memory whatever the clip's length.
-_BATCH_ELEMENTS = 20_000
+_BATCH_ELEMENTS = 10_000
 #: Batches fitted at once (threads): memory is this many batches' temporaries.
 _FIT_THREADS = 2
 
