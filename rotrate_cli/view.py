@@ -88,10 +88,26 @@ def keep_for_view(tracks: pd.DataFrame) -> pd.DataFrame:
     counts = np.diff(np.r_[starts, len(track)])
     long_enough = np.flatnonzero(counts >= MIN_SAMPLES)
     chosen = long_enough[np.argsort(-counts[long_enough], kind="stable")[:KEEP_TRACKS]]
-    rows = [np.unique(np.linspace(starts[i], starts[i] + counts[i] - 1, min(counts[i], KEEP_SAMPLES))
-                      .round().astype(np.int64)) for i in np.sort(chosen)]
-    index = np.concatenate(rows) if rows else np.zeros(0, np.int64)
-    return tracks[["track", "time_s", "x_px", "y_px"]].iloc[index].reset_index(drop=True)
+    return tracks[["track", "time_s", "x_px", "y_px"]].iloc[_evenly(starts, counts, np.sort(chosen))].reset_index(
+        drop=True)
+
+
+def _evenly(starts: np.ndarray, counts: np.ndarray, chosen: np.ndarray) -> np.ndarray:
+    """The rows of the ``chosen`` tracks, each thinned evenly to at most :data:`KEEP_SAMPLES`:
+    ``linspace(first, last, samples)`` rounded, for all tracks at once (a loop over a thousand
+    tracks took 4% of a short clip's analysis). The steps are at least one row, so no row
+    repeats."""
+    if len(chosen) == 0:
+        return np.zeros(0, np.int64)
+    first, count = starts[chosen].astype(np.float64), counts[chosen]
+    samples = np.minimum(count, KEEP_SAMPLES)
+    step = np.where(samples > 1, (count - 1) / np.maximum(samples - 1, 1), 0.0)
+    owner = np.repeat(np.arange(len(chosen)), samples)
+    within = np.arange(int(samples.sum())) - np.repeat(np.cumsum(samples) - samples, samples)
+    rows = within * step[owner] + first[owner]  # numpy's linspace: index * step + start
+    last = np.cumsum(samples) - 1
+    rows[last] = first + count - 1  # and its end point exactly
+    return rows.round().astype(np.int64)
 
 
 @dataclass(frozen=True)

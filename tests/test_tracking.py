@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
 from rotrate_cli.decode import Frame
 from rotrate_cli.synth import Renderer, SceneConfig
-from rotrate_cli.tracking import Roi, TrackerConfig, track_frames, tracking_image
+from rotrate_cli.tracking import Roi, TrackerConfig, track_frames, tracking_image, tracking_scale
 
 
 @pytest.fixture(scope="module")
@@ -101,3 +102,17 @@ def test_a_long_clips_store_keeps_every_other_track_once_full() -> None:
     assert table["frame"].min() == 0 and table["frame"].max() == 99  # the whole clip, not its start
     first = table[table["track"] == 0]
     assert list(first["frame"]) == list(range(10)) and (first["x_px"] == 0).all()
+
+
+@pytest.mark.parametrize("size_px", [(1920, 1080), (1920, 1088), (2560, 1440), (1280, 720), (960, 540)])
+def test_reduction_is_opencvs_area_average(size_px):
+    """A 1080p frame is reduced a third by a box filter sampled at the blocks' centres (faster):
+    the same pixels as cv2.INTER_AREA, there and at every other size (which keep OpenCV's)."""
+    width, height = size_px
+    rng = np.random.default_rng(width + height)
+    image = (rng.random((height, width)) * 255).astype(np.uint8)
+    scale = tracking_scale(width, TrackerConfig())
+    expected = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    reduced = tracking_image(image, scale)
+    assert reduced.shape == expected.shape and reduced.flags["C_CONTIGUOUS"]
+    np.testing.assert_array_equal(reduced, expected)
