@@ -107,7 +107,7 @@ def _clip(condition: Condition) -> tuple[Path, dict]:
     return path, write_clip(condition.scene, path, force=True)
 
 
-def measure(condition: Condition, tracker: str = "klt", angle_from: str = "motion",
+def measure(condition: Condition, tracker: str = "klt", angle_from: str = "auto",
             given_fov: bool = False) -> dict[str, object]:
     """Render (or reuse) the clip, track it once (with ``tracker``), and estimate with both methods.
     No field of view is given (the default run finds it), or with ``given_fov`` the true one is
@@ -176,8 +176,8 @@ def main() -> int:
     parser.add_argument("--only", default="", help="comma-separated condition names")
     parser.add_argument("--tracker", default="klt", choices=("klt", "csrt"),
                         help="the automatic points' tracker (the targets are those of the default, klt)")
-    parser.add_argument("--angle-from", default="motion", choices=("motion", "paths"),
-                        help="how the axis angle is found (every clip's true angle is 0)")
+    parser.add_argument("--angle-from", default="auto", choices=("auto", "motion", "paths"),
+                        help="how the axis angle is found (every clip's true angle is 0); auto is the default's")
     parser.add_argument("--given-fov", action="store_true",
                         help="give perspective clips their true field of view (the default finds it)")
     args = parser.parse_args()
@@ -188,9 +188,9 @@ def main() -> int:
                                                                   angle_from=args.angle_from,
                                                                   given_fov=args.given_fov), conditions)))
     suffix = ("" if args.tracker == "klt" else f"_{args.tracker}") + \
-        ("" if args.angle_from == "motion" else f"_{args.angle_from}") + ("_given_fov" if args.given_fov else "")
+        ("" if args.angle_from == "auto" else f"_{args.angle_from}") + ("_given_fov" if args.given_fov else "")
     table.to_csv(OUT.parent / f"accuracy{suffix}.csv", index=False)
-    print(f"tracker: {args.tracker}; angle from the {args.angle_from}; "
+    print(f"tracker: {args.tracker}; angle: {args.angle_from}; "
           f"field of view {'given for perspective clips' if args.given_fov else 'found from the tracks'}; "
           f"analyze time per clip: median {table['analyze_s'].median():.1f} s")
     pd.set_option("display.width", 200)
@@ -206,7 +206,7 @@ def main() -> int:
     print("targets (ortho median <= 0.15%, max <= 0.7%; perspective max <= 1%; coverage 100%): "
           + ("all met" if not missed else "MISSED: " + "; ".join(missed))
           + ("" if args.tracker == "klt" else f" (they are the default tracker's: {args.tracker} for reference)"))
-    if args.tracker != "klt" or args.angle_from != "motion" or args.given_fov:
+    if args.tracker != "klt" or args.angle_from != "auto" or args.given_fov:
         return 1 if len(wrong_sense) else 0
     return 1 if missed or len(wrong_sense) else 0
 

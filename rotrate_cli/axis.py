@@ -83,18 +83,39 @@ def offsets_along(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_
     return offset
 
 
+def _step_scatter(tracks: pd.DataFrame) -> np.ndarray | None:
+    """The 2x2 scatter of the tracks' frame-to-frame steps; None when nothing moves."""
+    same = (tracks["track"].to_numpy()[1:] == tracks["track"].to_numpy()[:-1])
+    dx = np.diff(tracks["x_px"].to_numpy(dtype=np.float64))[same]
+    dy = np.diff(tracks["y_px"].to_numpy(dtype=np.float64))[same]
+    if len(dx) == 0 or not (np.abs(dx).sum() + np.abs(dy).sum()) > 0:
+        return None
+    return np.array([[dx @ dx, dx @ dy], [dx @ dy, dy @ dy]])
+
+
+def steps_spread(tracks: pd.DataFrame) -> float:
+    """How far the tracks' steps spread across their main direction: the ratio of the steps'
+    scatter across it to that along it (NaN when nothing moves). Seen from the side, points
+    swing to and fro along one line (near 0); seen from an elevation ``e``, around ellipses
+    whose width is ``sin e`` of their length: up to ``sin(e)^2``, less where the tracks cover
+    only the front of their ellipses (measured: 0.002 on the side-view bench clip, 0.13-0.17 on
+    renders and the dinosaur from 25-27 degrees above, 0.45 from 45)."""
+    scatter = _step_scatter(tracks)
+    if scatter is None:
+        return math.nan
+    values = np.linalg.eigvalsh(scatter)
+    return float(values[0] / values[1]) if values[1] > 0 else math.nan
+
+
 def motion_angle_deg(tracks: pd.DataFrame) -> float:
     """The axis angle implied by the tracks' motion (NaN when nothing moves).
 
     ``tracks``: ``track, frame, x_px, y_px``, sorted by track then frame. The principal
     direction of the frame-to-frame displacements is the offset direction.
     """
-    same = (tracks["track"].to_numpy()[1:] == tracks["track"].to_numpy()[:-1])
-    dx = np.diff(tracks["x_px"].to_numpy(dtype=np.float64))[same]
-    dy = np.diff(tracks["y_px"].to_numpy(dtype=np.float64))[same]
-    if len(dx) == 0 or not (np.abs(dx).sum() + np.abs(dy).sum()) > 0:
+    scatter = _step_scatter(tracks)
+    if scatter is None:
         return math.nan
-    scatter = np.array([[dx @ dx, dx @ dy], [dx @ dy, dy @ dy]])
     values, vectors = np.linalg.eigh(scatter)
     mx, my = vectors[:, int(np.argmax(values))]
     angle = math.degrees(math.atan2(my, mx))

@@ -210,15 +210,19 @@ def analyze_command(
                                                      help="Axis angle in the image, degrees (0 "
                                                                         "vertical, + top end right); default: "
                                                                         "from the motion.")] = None,
-    angle_from: Annotated[str, typer.Option("--angle-from", metavar="motion|paths",
-                                            help="How to find the axis angle: motion (default) "
-                                                                 "or paths (each track's elliptical path; "
-                                                                 "right when the camera looks down on the "
-                                                                 "object; slower).")] = "motion",
+    angle_from: Annotated[str, typer.Option("--angle-from", metavar="auto|motion|paths",
+                                            help="How to find the axis angle: motion (the steps' "
+                                                                 "main direction), paths (each track's "
+                                                                 "elliptical path; right when the camera "
+                                                                 "looks down on the object; slower), or auto "
+                                                                 "(default: paths where the steps show the "
+                                                                 "camera looking down by 15 degrees or "
+                                                                 "more).")] = "auto",
     elevation: Annotated[float | None, typer.Option("--elevation", metavar="DEG",
                                                     help="How far the camera looks down on the "
                                                                        "object, degrees, for the pinhole model "
-                                                                       "(--fov); found with --angle-from paths.")
+                                                                       "(--fov); found where the angle comes from the "
+                                                                       "paths.")
                          ] = None,
     window: Annotated[float | None, typer.Option("--window", metavar="SECONDS",
                                                  help="Also measure omega(t) over a sliding "
@@ -512,9 +516,9 @@ def frame_command(
     fps: Annotated[float | None, typer.Option("--fps", metavar="FPS",
                                               help="Frame rate; required for image sequences.")] = None,
     grid: Annotated[int, typer.Option("--grid", help="Grid spacing, px.")] = 50,
-    angle_from: Annotated[str, typer.Option("--angle-from", metavar="motion|paths",
-                                            help="How to find the axis angle: motion (default) "
-                                                                 "or paths (as for analyze).")] = "motion",
+    angle_from: Annotated[str, typer.Option("--angle-from", metavar="auto|motion|paths",
+                                            help="How to find the axis angle: auto (default), "
+                                                                 "motion or paths (as for analyze).")] = "auto",
     force: ForceOption = False,
     debug: DebugOption = False,
 ) -> None:
@@ -542,7 +546,7 @@ def frame_command(
         else:
             x, y = analysis.fixation_px
             draw_axis(image, (x, y), analysis.axis_angle_deg, f"{x:.1f},{y:.1f}")
-            hint = "" if angle_from == "motion" else f" --angle-from {angle_from}"
+            hint = "" if angle_from == "auto" else f" --angle-from {angle_from}"
             message = (f"axis found through {x:.1f},{y:.1f} ({analysis.axis_angle_deg:+.1f} deg from vertical; "
                        f"omega {analysis.omega_rad_s:.4f} rad/s): try --fixation {x:.1f},{y:.1f}{hint}")
         write_image(output, image, force)

@@ -16,7 +16,7 @@ from rotrate_cli.tracking import (
 )
 
 #: How the axis's angle is found when not given (see ``AnalysisConfig.angle_from``).
-ANGLE_SOURCES = ("motion", "paths")
+ANGLE_SOURCES = ("auto", "motion", "paths")
 
 
 @dataclass(frozen=True)
@@ -29,12 +29,14 @@ class AnalysisConfig:
         axis_angle_deg: the axis's angle in the image (0 vertical, positive: top end leaning
             right); None to find it (see ``angle_from``).
         angle_from: how the angle is found when not given: ``motion`` (the principal direction
-            of all the steps, :func:`rotrate_cli.axis.motion_angle_deg`) or ``paths`` (the long
+            of all the steps, :func:`rotrate_cli.axis.motion_angle_deg`), ``paths`` (the long
             axis of each track's elliptical path, :func:`rotrate_cli.axis.path_shape`:
-            right when the camera looks down on the object, where ``motion`` leans).
+            right when the camera looks down on the object, where ``motion`` leans), or
+            ``auto`` (the default): ``paths`` where the steps show the camera looking down
+            (:func:`rotrate_cli.geometry.axis_angle`), ``motion`` otherwise.
         elevation_deg: how far the camera looks down on the object, degrees, for the pinhole
-            model (``fov_deg``/``focal_px``); None: level, or found from the paths with
-            ``angle_from="paths"``.
+            model (``fov_deg``/``focal_px``); None: level, or found from the paths where the
+            angle comes from them.
         fps: frame-rate override in frames per second (required for image sequences).
         start_s, end_s: the time span to analyse, in seconds (``end_s`` None: to the end).
         every: use every N-th frame's positions for the rates (tracking still sees every frame);
@@ -67,7 +69,7 @@ class AnalysisConfig:
     fixation_px: tuple[float, float] | None
     fps: float | None = None
     axis_angle_deg: float | None = None
-    angle_from: str = "motion"
+    angle_from: str = "auto"
     elevation_deg: float | None = None
     start_s: float = 0.0
     end_s: float | None = None

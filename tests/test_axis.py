@@ -252,17 +252,41 @@ def test_angle_from_paths_on_a_cylinder_seen_from_above(tmp_path: Path) -> None:
                                       "30", "--size", "320x180", "--duration", "4", "--seed", "44"])
     assert result.exit_code == 0, result.output
     truth = truth_of(clip)
-    motion = analyze(clip, AnalysisConfig(fixation_px=tuple(truth["fixation_px"])))
+    motion = analyze(clip, AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), angle_from="motion"))
     paths = analyze(clip, AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), angle_from="paths"))
     assert abs(paths.axis_angle_deg) < 2.5
     assert abs(paths.axis_angle_deg) < abs(motion.axis_angle_deg)
     assert paths.axis_angle_from == "paths" and paths.axis_angle_found
     assert paths.omega_rad_s == pytest.approx(0.5, rel=0.01)
     assert paths.direction == "cw"
+    # the default sees the camera looking down and takes the paths' angle itself
+    default = analyze(clip, AnalysisConfig(fixation_px=tuple(truth["fixation_px"])))
+    assert default.axis_angle_from == "paths" and default.axis_angle_deg == pytest.approx(paths.axis_angle_deg)
+
+
+@pytest.mark.parametrize(("elevation_deg", "expected"), [(0.0, "motion"), (8.0, "motion"), (20.0, "paths"),
+                                                         (40.0, "paths")])
+def test_the_default_angle_comes_from_the_paths_when_the_camera_looks_down(elevation_deg: float,
+                                                                             expected: str) -> None:
+    """``angle_from="auto"``: the steps' spread across their main direction tells a camera
+    looking down, and there the paths give the angle (the motion's leans: -3 degrees at 20
+    degrees above, for -6); from the side the motion does (and the paths, which cost time,
+    are not read)."""
+    from rotrate_cli.geometry import axis_angle
+
+    tracks = _near_side_paths(-6.0, elevation_deg, omega=0.5)
+    spread = axes.steps_spread(tracks)
+    assert spread <= math.sin(math.radians(elevation_deg)) ** 2 + 0.005
+    angle, source, elevation, _ = axis_angle(tracks, axes.motion_angle_deg(tracks), AnalysisConfig(fixation_px=None))
+    assert source == expected
+    if expected == "paths":
+        assert angle == pytest.approx(-6.0, abs=1.0) and elevation == pytest.approx(elevation_deg, abs=3.0)
+    else:
+        assert angle == axes.motion_angle_deg(tracks) and math.isnan(elevation)
 
 
 @pytest.mark.parametrize(("options", "message"), [
-    (["--angle-from", "sideways"], "--angle-from must be one of motion, paths"),
+    (["--angle-from", "sideways"], "--angle-from must be one of auto, motion, paths"),
     (["--angle-from", "paths", "--axis-angle", "3"], "either --axis-angle or --angle-from paths"),
     (["--angle-from", "paths", "--segment"], "cannot be combined with --segment"),
 ])
@@ -277,17 +301,19 @@ def test_angle_from_bad_combinations_are_one_line_errors(options: list[str], mes
 def test_pinhole_camera_seen_from_above(tmp_path: Path) -> None:
     # a 25-degree lens looking down 30 degrees: a point's depth changes by its radial position
     # times cos(30), which the level pinhole model overstates (measured -1.19%); given the
-    # elevation, or found from the paths, the model fits (+0.02%, -0.43%)
+    # elevation, or found from the paths (as the default now does here), the model fits (+0.02%, -0.43%)
     clip = tmp_path / "above.mp4"
     result = CliRunner().invoke(app, ["synth", str(clip), "--shape", "box", "--omega", "0.5", "--projection",
                                       "perspective", "--fov", "25", "--elevation", "30", "--size", "320x180",
                                       "--duration", "4", "--seed", "45"])
     assert result.exit_code == 0, result.output
     fixation = tuple(truth_of(clip)["fixation_px"])
-    level = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=25.0))
+    level = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=25.0, angle_from="motion"))
     given = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=25.0, elevation_deg=30.0))
     found = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=25.0, angle_from="paths"))
+    default = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=25.0))  # sees it looks down: paths
     assert abs(level.omega_rad_s - 0.5) > 0.005
+    assert default.axis_angle_from == "paths" and default.omega_rad_s == pytest.approx(found.omega_rad_s)
     assert given.omega_rad_s == pytest.approx(0.5, rel=0.003)
     assert found.omega_rad_s == pytest.approx(0.5, rel=0.007)
     assert found.elevation_deg == pytest.approx(30.0, abs=7.0)  # measured 25 (perspective narrows the paths)
@@ -295,7 +321,7 @@ def test_pinhole_camera_seen_from_above(tmp_path: Path) -> None:
     # paths after the fit (it used to stay NaN before the view was read, as this test asserted)
     assert level.camera is not None and level.camera.depth_scale == 1.0
     assert level.view is not None and level.elevation_deg == level.view.elevation_deg
-    for analysis in (level, given, found):
+    for analysis in (level, given, found, default):
         assert analysis.direction == "ccw"
 
 

@@ -140,8 +140,8 @@ def test_manifest_rows_carry_the_angle_source_and_elevation(tmp_path: Path) -> N
                         "a.mp4,0.5,1,25,paths,\nb.mp4,0.5,1,25,,30\nc.mp4,0.5,1,,,\n")
     a, b, c = (job.config for job in read_manifest(manifest, AnalysisConfig(fixation_px=None)))
     assert (a.angle_from, a.elevation_deg, a.fov_deg) == ("paths", None, 25.0)
-    assert (b.angle_from, b.elevation_deg) == ("motion", 30.0)
-    assert (c.angle_from, c.elevation_deg, c.fov_deg) == ("motion", None, None)
+    assert (b.angle_from, b.elevation_deg) == ("auto", 30.0)
+    assert (c.angle_from, c.elevation_deg, c.fov_deg) == ("auto", None, None)
 
 
 @pytest.mark.parametrize(("text", "word"), [

@@ -21,7 +21,7 @@ BOX = SAMPLES / "box_ortho.mp4"
 ROLLED = SAMPLES / "box_roll10.mp4"
 
 
-@pytest.mark.parametrize("angle_from", ["motion", "paths"])
+@pytest.mark.parametrize("angle_from", ["auto", "motion", "paths"])
 def test_frame_writes_a_still_with_a_grid_and_names_the_axis(tmp_path: Path, angle_from: str) -> None:
     still = tmp_path / "frame.png"
     result = runner.invoke(app, ["frame", str(ROLLED), "--at", "2", "-o", str(still), "--angle-from", angle_from])
