@@ -38,6 +38,16 @@ from rotrate_cli.view import View, view_from_paths
 #: fixation shows the given one to be off by more than the measurement resolves.
 SHARPER = 1.5
 
+#: Seen from this many degrees above (or below) or more, as the tracks' paths tell it, the default
+#: reads the axis's angle from the paths rather than from their motion (``angle_from="auto"``).
+LOOKS_DOWN_DEG = 15.0
+#: The paths are read where the steps spread across their main direction by this much or more
+#: (:func:`rotrate_cli.axis.steps_spread`): about ``sin(elevation)^2`` where tracks cover whole
+#: near halves, less where they cover short arcs near the front (0.028 and 0.046 on such tracks
+#: seen from 15 and 20 degrees above, 0.13 on a render from 25). Side views spread 0.002-0.004
+#: (the 720p bench clip, an EPFL car), the EPFL cars from a few degrees above up to 0.053.
+LOOKS_DOWN_SPREAD = 0.03
+
 #: How the axis's angle was had (``Geometry.angle_from``): given (``--axis-angle``), from the
 #: tracks' motion or their paths' shape, or assumed vertical (too few tracks to tell).
 ANGLE_FROM = ("given", "motion", "paths", "assumed")
@@ -116,17 +126,6 @@ def axis_angle(tracks: pd.DataFrame, motion_angle_deg: float,
         if shape is not None and shape.elevation_deg >= LOOKS_DOWN_DEG:
             return shape.angle_deg, "paths", shape.elevation_deg, ()
     return motion_angle_deg, "motion", math.nan, ()
-
-
-#: Seen from this many degrees above (or below) or more, as the tracks' paths tell it, the default
-#: reads the axis's angle from the paths rather than from their motion (``angle_from="auto"``).
-LOOKS_DOWN_DEG = 15.0
-#: The paths are read where the steps spread across their main direction by this much or more
-#: (:func:`rotrate_cli.axis.steps_spread`): about ``sin(elevation)^2`` where tracks cover whole
-#: near halves, less where they cover short arcs near the front (0.028 and 0.046 on such tracks
-#: seen from 15 and 20 degrees above, 0.13 on a render from 25). Side views spread 0.002-0.004
-#: (the 720p bench clip, an EPFL car), the EPFL cars from a few degrees above up to 0.053.
-LOOKS_DOWN_SPREAD = 0.03
 
 
 def looks_down(tracks: pd.DataFrame) -> bool:
