@@ -122,10 +122,10 @@ def with_paths_rate(result: RateResult, view_tracks: pd.DataFrame) -> tuple[Rate
     paths: +0.6%).
 
     Orthographic fits only (:func:`check_rate` does not ask with a pinhole camera): the paths
-    are fitted as circles seen from far away, which a near camera does not see. Through 25-30
+    are fitted as circles seen from far away, which a near camera does not see. Through 25-40
     degree lenses from 30-45 degrees above, the paths read +6.6% to +15% on renders whose
-    pinhole fits were within 1.5% and their intervals covering, and widening to them called
-    those results weak; seen orthographically the paths were within 0.6% on boxes and
+    pinhole fits were within 1.5% (a sphere's, -2.1% and -2.8%) with their intervals covering,
+    and widening to them called those results weak; seen orthographically the paths were within 0.6% on boxes and
     cylinders from 45 and 70 degrees above (one cylinder from 30: +4.7%)."""
     combined = result.combined
     view = view_from_paths(view_tracks, combined.omega_rad_s)
