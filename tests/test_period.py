@@ -142,3 +142,24 @@ def test_a_single_inexact_return_of_the_picture_is_not_a_sure_turn() -> None:
     assert judge(agreeing, _single_closing(excess=0.25), 20).quality == "good"
     # a clip that holds several returns is not doubted so (the wheel: 5 turns, matched once)
     assert judge(slow_tracks, _single_closing(excess=0.25, frames=250), 20).quality == "good"
+
+
+def test_a_doubted_return_gives_an_interval_that_holds_both_readings() -> None:
+    """A single return doubted as a look-alike view: the interval spans the repetition's rate (a
+    turn) and the tracks' interval (a look-alike view); an exact return is still reported, an
+    inexact one gives way to the tracks' rate (the EPFL cars' first 50-70 photographs: +91% to
+    +99% by the repetition, -1% to -53% by the tracks)."""
+    slow_tracks = Combined(0.05, 0.045, 0.06, 20)
+    turn = 2 * math.pi / 49.0
+    exact = judge(slow_tracks, _single_closing(excess=0.03), 20)
+    assert exact.quality == "weak" and exact.rate_from == "repetition"
+    assert exact.omega_rad_s == pytest.approx(turn, rel=1e-6)
+    assert exact.omega_low_rad_s == pytest.approx(0.045) and exact.omega_high_rad_s > turn
+    assert any("spans both readings" in note for note in exact.notes)
+    inexact = judge(slow_tracks, _single_closing(excess=0.25), 20)
+    assert inexact.quality == "weak" and inexact.rate_from == "tracks"
+    assert inexact.omega_rad_s == pytest.approx(0.05)
+    assert inexact.omega_low_rad_s == pytest.approx(0.045) and inexact.omega_high_rad_s > turn
+    # without tracks to weigh, the doubt is a word only (nothing to widen to)
+    alone = judge(None, _single_closing(excess=0.25))
+    assert alone.rate_from == "repetition" and alone.omega_high_rad_s / alone.omega_low_rad_s < 1.1

@@ -31,7 +31,8 @@ def test_epfl_car_on_a_turntable(sequence: str, clock: str) -> None:
     assert analysis.direction == truth["direction"]
     # good, or weak only because its picture comes back once (a full turn of photographs) while
     # its tracks turn well under a turn in that time: seq02's glossy tracks read 0.028 rad/frame
-    # for 0.065, as a car's look-alike view half a turn on would (see the next test)
+    # for 0.065, as a car's look-alike view half a turn on would (see the next test); its interval
+    # then spans the tracks' rate too
     assert analysis.quality == "good" or all("comes back only once" in why for why in analysis.verdict.weak_because)
     assert analysis.clock == clock
     assert analysis.camera_from == "exif"  # the lens from the photographs
@@ -41,15 +42,23 @@ def test_epfl_car_on_a_turntable(sequence: str, clock: str) -> None:
 @pytest.mark.parametrize("clock", ["fps", "exif"])
 def test_a_car_half_a_turn_on_is_not_taken_for_a_turn(sequence: str, clock: str) -> None:
     """The first 50 photographs (about half a turn): the car's far side looks like its near side,
-    and the picture's single return read twice the rate, as good. Now weak, whatever is reported."""
+    and the picture's single return read twice the rate, as good. Now weak. seq09's picture comes
+    back once, inexactly: its interval holds both readings (a turn, or a look-alike view at the
+    tracks' rate), and so the truth, and the tracks' rate is reported. seq02's does not come back
+    within these 50: its tracks alone read 35-40% low, and say they are weak."""
     folder = CARS / sequence
     need(folder, f"the EPFL car sequence {sequence}")
     truth = json.loads((folder / "truth.json").read_text())
     fps = 1.0 if clock == "fps" else None
     analysis = analyze(folder, AnalysisConfig(fixation_px=None, fps=fps, end_s=50.0 if fps else 52.5))
     expected = truth["omega"] if clock == "fps" else truth["omega_rad_s"]
-    assert abs(analysis.omega_rad_s / expected - 1) > 0.05  # neither measurement is right here...
-    assert analysis.quality == "weak"  # ...and the report says so
+    assert analysis.quality == "weak"  # neither measurement is sure here, and the report says so
+    if sequence == "seq09":
+        assert analysis.period is not None and analysis.rate_from == "tracks"
+        assert analysis.omega_low_rad_s <= expected <= analysis.omega_high_rad_s
+        assert analysis.omega_high_rad_s > 1.8 * expected  # a turn in the return's time is in it too
+    else:
+        assert analysis.period is None and abs(analysis.omega_rad_s / expected - 1) > 0.05
 
 
 def test_bicycle_wheel_seen_face_on() -> None:
