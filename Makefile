@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow test-floor lint bench bench-memory bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov clean
+.PHONY: demo test test-slow test-floor lint bench bench-memory bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -66,6 +66,10 @@ bench-accuracy-csrt: $(STAMP)
 ## bench-accuracy-given-fov: the same suite with the perspective clips' true field of view given (--fov DEG)
 bench-accuracy-given-fov: $(STAMP)
 	$(BIN)/python benchmarks/bench_accuracy.py --given-fov
+
+## bench-accuracy-reseed: the same 17 conditions rendered with other seeds (other textures and noise; about 5 minutes the first time)
+bench-accuracy-reseed: $(STAMP)
+	$(BIN)/python benchmarks/bench_accuracy.py --reseed 1000
 
 clean:
 	rm -rf $(VENV) $(FLOOR) .pytest_cache .ruff_cache bench_out

@@ -180,17 +180,24 @@ def main() -> int:
                         help="how the axis angle is found (every clip's true angle is 0); auto is the default's")
     parser.add_argument("--given-fov", action="store_true",
                         help="give perspective clips their true field of view (the default finds it)")
+    parser.add_argument("--reseed", type=int, default=0,
+                        help="add this to every scene's seed: the same conditions with other textures and noise "
+                             "(a check that the figures do not hang on the suite's own renders; rendered on first use)")
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     conditions = [c for c in suite() if not args.only or c.name in args.only.split(",")]
+    if args.reseed:
+        conditions = [dataclasses.replace(c, scene=dataclasses.replace(c.scene, seed=c.scene.seed + args.reseed))
+                      for c in conditions]
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         table = pd.DataFrame(list(pool.map(functools.partial(measure, tracker=args.tracker,
                                                                   angle_from=args.angle_from,
                                                                   given_fov=args.given_fov), conditions)))
     suffix = ("" if args.tracker == "klt" else f"_{args.tracker}") + \
-        ("" if args.angle_from == "auto" else f"_{args.angle_from}") + ("_given_fov" if args.given_fov else "")
+        ("" if args.angle_from == "auto" else f"_{args.angle_from}") + ("_given_fov" if args.given_fov else "") + \
+        (f"_reseed{args.reseed}" if args.reseed else "")
     table.to_csv(OUT.parent / f"accuracy{suffix}.csv", index=False)
-    print(f"tracker: {args.tracker}; angle: {args.angle_from}; "
+    print(f"tracker: {args.tracker}; angle: {args.angle_from}; seeds {'+' + str(args.reseed) if args.reseed else 'as rendered'}; "
           f"field of view {'given for perspective clips' if args.given_fov else 'found from the tracks'}; "
           f"analyze time per clip: median {table['analyze_s'].median():.1f} s")
     pd.set_option("display.width", 200)

@@ -85,6 +85,23 @@ def test_tracks_either_side_of_the_axis_must_agree() -> None:
     assert sides_disagree(_result_with_sides(0.46, 0.50, per_side=2)) is None  # too few to tell
 
 
+def test_sides_that_disagree_widen_the_interval_to_hold_both() -> None:
+    """Which side is off is not known: the interval holds both sides' rates (an EPFL car's first
+    70 photographs: +5.6% within [+1.9%, +9.3%], the left side 13% lower; now [-22.8%, +9.3%])."""
+    from dataclasses import replace
+
+    from rotrate_cli.doubts import with_sides_span
+    from rotrate_cli.outliers import Combined
+
+    apart = _result_with_sides(0.46, 0.50)
+    narrow = replace(apart, combined=Combined(0.495, 0.49, 0.50, 12))  # the joint fit followed one side
+    widened = with_sides_span(narrow).combined
+    assert widened.omega_rad_s == 0.495
+    assert widened.omega_low_rad_s < 0.461 and widened.omega_high_rad_s >= 0.50
+    same = replace(_result_with_sides(0.50, 0.50), combined=Combined(0.5, 0.499, 0.501, 12))
+    assert with_sides_span(same).combined == same.combined  # sides that agree change nothing
+
+
 def test_a_coarse_clock_widens_the_tracks_interval() -> None:
     import pandas as pd
 
