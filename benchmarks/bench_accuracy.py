@@ -197,7 +197,8 @@ def main() -> int:
         ("" if args.angle_from == "auto" else f"_{args.angle_from}") + ("_given_fov" if args.given_fov else "") + \
         (f"_reseed{args.reseed}" if args.reseed else "")
     table.to_csv(OUT.parent / f"accuracy{suffix}.csv", index=False)
-    print(f"tracker: {args.tracker}; angle: {args.angle_from}; seeds {'+' + str(args.reseed) if args.reseed else 'as rendered'}; "
+    seeds = f"seeds +{args.reseed}" if args.reseed else "seeds as in the suite"
+    print(f"tracker: {args.tracker}; angle: {args.angle_from}; {seeds}; "
           f"field of view {'given for perspective clips' if args.given_fov else 'found from the tracks'}; "
           f"analyze time per clip: median {table['analyze_s'].median():.1f} s")
     pd.set_option("display.width", 200)
