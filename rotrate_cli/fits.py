@@ -113,7 +113,7 @@ def _direction(offsets: pd.DataFrame, features: pd.DataFrame) -> str:
     values = offsets["offset_px"].to_numpy()
     starts = np.flatnonzero(np.r_[True, tracks[1:] != tracks[:-1]])
     ends = np.r_[starts[1:], len(tracks)] - 1
-    keep = np.array([int(t) in used for t in tracks[starts]], dtype=bool)
+    keep = np.isin(tracks[starts], np.fromiter(used, dtype=np.int64, count=len(used)))
     travel = values[ends[keep]] - values[starts[keep]]
     total = float(np.abs(travel).sum())
     if total <= 0:

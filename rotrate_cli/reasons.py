@@ -102,8 +102,14 @@ def name_rejections(features: pd.DataFrame, places: pd.DataFrame, fixation_px: t
     size = math.dist(hull.min(axis=(0, 1)), hull.max(axis=(0, 1)))
     if not size > 0:
         return features
-    depth = np.array([cv2.pointPolygonTest(hull, (float(px), float(py)), True)
-                      if math.isfinite(px) and math.isfinite(py) else -math.inf for px, py in zip(x, y, strict=True)])
+    reason = features["reason"].to_numpy(dtype=object).copy()
+    moving = np.isin(reason, ("disagrees", "poor_fit", "no_fit"))
+    # how far inside the hull: asked only of the tracks renamed here (the record clip's 45,000
+    # short tracks need no answer)
+    asked = (moving | (reason == "static")) & np.isfinite(x) & np.isfinite(y)
+    depth = np.full(len(x), -math.inf)
+    depth[asked] = [cv2.pointPolygonTest(hull, (float(px), float(py)), True) for px, py in zip(x[asked], y[asked],
+                                                                                             strict=True)]
     inside = depth >= -MARGIN * size
     # well inside: a still point on the outline is the outline's edge against the background,
     # which stands where the body's widest part passes (a rendered matte box: 120 such tracks)
@@ -111,8 +117,6 @@ def name_rejections(features: pd.DataFrame, places: pd.DataFrame, fixation_px: t
     ux, uy = unit_offset(angle_deg)
     across = (x - fixation_px[0]) * ux + (y - fixation_px[1]) * uy
     half_width = float(np.max(np.abs(across[inlier])))
-    reason = features["reason"].to_numpy(dtype=object).copy()
-    moving = np.isin(reason, ("disagrees", "poor_fit", "no_fit"))
     turn = np.minimum(abs(omega_rad_s) * where["span_s"].to_numpy(dtype=np.float64), math.pi)
     least_motion = np.abs(across) * (1.0 - np.cos(np.nan_to_num(turn)))
     still = features["range"].to_numpy(dtype=np.float64) * STILLER < least_motion
