@@ -28,6 +28,12 @@ from rotrate_cli.outliers import Combined
 #: in omega, which a floor of 35% left just inside the interval).
 LENS_FLOOR = 0.5
 
+#: Where the tracks cannot tell the lens, the interval holds the rates through any lens from the
+#: orthographic camera to one this wide (a phone's main camera is 65-75 degrees across; the EPFL
+#: cars' 64). A box turned 2.4 rad in 3 s through a 60-degree lens, its halves' rates apart:
+#: orthographic +13.2% within [+2.1%, +24.2%], weak, the truth outside.
+WIDEST_FOV_DEG = 70.0
+
 #: Where the camera model came from (``Lens.source``).
 CAMERA_SOURCES = ("orthographic", "given", "exif", "found")
 
@@ -43,12 +49,15 @@ class Lens:
         source: ``orthographic`` (the paper's), ``given`` (``--fov``/``--focal-px``), ``exif``
             (the photographs' lens) or ``found`` (from the tracks).
         estimate: what the tracks said about the camera where it was sought; None otherwise.
+        unsettled: the lens was sought and the tracks could not tell it (too few turned far
+            enough, or the rate changed): the orthographic camera stands in for an unknown one.
     """
 
     focal_px: float | None
     elevation_deg: float = math.nan
     source: str = "orthographic"
     estimate: FocalEstimate | None = None
+    unsettled: bool = False
 
 
 def lens_from(config: AnalysisConfig, info: VideoInfo) -> Lens:
@@ -85,11 +94,11 @@ def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg:
     offsets = axes.offsets_along(tracks, fixation_px, angle_deg)
     omega = axes.rate_from_recurrence(tracks, offsets)
     if not (math.isfinite(omega) and omega > 0) or _changing(tracks, offsets):
-        return lens
+        return replace(lens, unsettled=True)
     elevation = lens.elevation_deg if math.isfinite(lens.elevation_deg) else 0.0
     estimate = estimate_focal(tracks, fixation_px, angle_deg, omega, size_px, elevation)
     if estimate is None:
-        return lens
+        return replace(lens, unsettled=True)
     if not math.isfinite(estimate.focal_px):
         return replace(lens, estimate=estimate, source="found")
     if not math.isfinite(lens.elevation_deg):
@@ -123,23 +132,44 @@ def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, fl
                     config: AnalysisConfig, size_px: tuple[int, int]) -> RateResult:
     """The result with its interval widened to hold the rates measured through the lenses at the
     ends of a found lens's 95% interval (its inverse focal length +-1.96 standard errors, and at
-    least +-:data:`LENS_FLOOR` of it; 0 is orthographic). As it is for any other lens."""
+    least +-:data:`LENS_FLOOR` of it; 0 is orthographic), or where the lens was sought and could
+    not be told, through the orthographic camera and a :data:`WIDEST_FOV_DEG` lens. As it is for
+    any other lens."""
     focal = lens.estimate
-    if lens.source != "found" or focal is None or lens.focal_px is None or result.combined.tracks_used == 0:
+    if result.combined.tracks_used == 0:
         return result
+    if lens.unsettled and lens.focal_px is None:
+        # the tracks could not tell the lens: any from the paper's orthographic camera to a wide one
+        ends: tuple[float, ...] = (0.0, 1.0 / rates.focal_px_from_fov(WIDEST_FOV_DEG, size_px[0]))
+    elif lens.source != "found" or focal is None or lens.focal_px is None:
+        return result
+    else:
+        half = max(1.96 * focal.inverse_focal_se, LENS_FLOOR * focal.inverse_focal)
+        lower = focal.inverse_focal - half
+        if lower < 1.0 / (ORTHOGRAPHIC_WIDTHS * size_px[0]):
+            lower = 0.0  # within its uncertainty of a lens called orthographic: the paper's model is as likely
+        ends = (lower, focal.inverse_focal + half)
     rates_at_ends = []
-    half = max(1.96 * focal.inverse_focal_se, LENS_FLOOR * focal.inverse_focal)
-    lower = focal.inverse_focal - half
-    if lower < 1.0 / (ORTHOGRAPHIC_WIDTHS * size_px[0]):
-        lower = 0.0  # within its uncertainty of a lens called orthographic: the paper's model is as likely
-    for inverse in (lower, focal.inverse_focal + half):
+    for inverse in ends:
         end = replace(lens, focal_px=1.0 / inverse if inverse > 0 else None)
         camera = camera_at(end, size_px, fixation_px, angle_deg)
         rates_at_ends.append(rates_from_offsets(result.offsets, config.method, config.rejection, camera)
                              .combined.omega_rad_s)
     combined = result.combined
-    low = float(np.nanmin([combined.omega_low_rad_s, *rates_at_ends]))
-    high = float(np.nanmax([combined.omega_high_rad_s, *rates_at_ends]))
+    # where the paper's orthographic camera is one end, it is as likely as the lens found, and its
+    # rate carries the tracks' own scatter too (an orthographic noisy sphere, 0.38 of a turn: a
+    # lens found at 8.9 degrees read -3.5%, the paper's model -0.7% within +-0.9%; the interval
+    # held the latter's rate only, and missed the truth by 0.7%); so do both ends of an unknown
+    # lens's range (the box of WIDEST_FOV_DEG: orthographic +13.2% within [+2.1%, +24.2%], its
+    # true 60-degree lens given -0.25%; now within [-8.5%, +24.2%]). The ends of a found lens's
+    # range are the far edges of a generous interval (:data:`LENS_FLOOR`): their rates alone.
+    below = combined.omega_rad_s - combined.omega_low_rad_s
+    above = combined.omega_high_rad_s - combined.omega_rad_s
+    spread = [(below, above) if inverse == 0.0 or lens.unsettled else (0.0, 0.0) for inverse in ends]
+    low = float(np.nanmin([combined.omega_low_rad_s,
+                           *(rate - down for rate, (down, _) in zip(rates_at_ends, spread, strict=True))]))
+    high = float(np.nanmax([combined.omega_high_rad_s,
+                            *(rate + up for rate, (_, up) in zip(rates_at_ends, spread, strict=True))]))
     return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
 
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from rotrate_cli.camera import with_lens_doubt
+from rotrate_cli.camera import WIDEST_FOV_DEG, with_lens_doubt
 from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.fits import RateResult, changes, rate_change
 from rotrate_cli.geometry import Geometry, fixation_doubt
@@ -45,6 +45,11 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
     result = with_clock_doubt(result, clock_resolution_s)
     if repeating or result.combined.tracks_used == 0:
         return Checked(result)
+    lens_notes: tuple[str, ...] = ()
+    if geometry.lens.unsettled and geometry.lens.focal_px is None:
+        lens_notes = (f"the tracks could not tell the camera's lens (too few turned far enough, or the rate changes): "
+                      f"the paper's orthographic model is used, and the 95% interval holds the rates through any "
+                      f"lens up to {WIDEST_FOV_DEG:g} degrees across; give --fov DEG if you know it",)
     doubts: tuple[str, ...] = ()
     camera = geometry.camera(size_px)
     doubt = fixation_doubt(result, geometry, config, size_px)
@@ -58,7 +63,7 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
         doubts += (sides,)
         result = with_sides_span(result)
     result, note = with_paths_rate(result, view_tracks) if camera is None else (result, None)
-    return Checked(result, doubts, (note,) if note else ())
+    return Checked(result, doubts, lens_notes + ((note,) if note else ()))
 
 
 #: Each side of the axis needs this many inlier tracks for the sides to be compared.

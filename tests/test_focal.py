@@ -143,3 +143,20 @@ def test_the_lens_is_not_sought_on_a_changing_rate() -> None:
         assert _changing(footage.tracks, offsets) is changing, name
     spin = analyze(SAMPLES / "box_spinup.mp4", AnalysisConfig(fixation_px=(319.5, 179.5)))
     assert spin.camera is None and spin.camera_from == "orthographic"
+
+
+def test_a_lens_the_tracks_cannot_tell_widens_the_interval_and_says_so() -> None:
+    """box_spinup.mp4: the lens is not sought on a changing rate (above), so it is unknown: the
+    orthographic model is used, a warning says so, and the interval holds the rates through any
+    lens up to 70 degrees across. With ``--fov ortho`` (the paper's model chosen) nothing widens."""
+    from rotrate_cli.camera import WIDEST_FOV_DEG
+
+    config = AnalysisConfig(fixation_px=(319.5, 179.5))
+    unknown = analyze(SAMPLES / "box_spinup.mp4", config)
+    chosen = analyze(SAMPLES / "box_spinup.mp4", AnalysisConfig(fixation_px=(319.5, 179.5), find_focal=False))
+    assert any("could not tell the camera's lens" in w and f"{WIDEST_FOV_DEG:g} degrees" in w for w in unknown.warnings)
+    assert not any("could not tell the camera's lens" in w for w in chosen.warnings)
+    assert unknown.omega_rad_s == pytest.approx(chosen.omega_rad_s)
+    # a wide lens reads a side view's rate lower: the interval reaches further down
+    assert unknown.omega_low_rad_s < 0.95 * chosen.omega_low_rad_s
+    assert unknown.omega_high_rad_s >= chosen.omega_high_rad_s
