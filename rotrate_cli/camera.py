@@ -198,6 +198,8 @@ def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, fl
     spread = [(below, above) if inverse == 0.0 or lens.unsettled else (0.0, 0.0) for inverse in ends]
     low = float(np.nanmin([combined.omega_low_rad_s,
                            *(rate - down for rate, (down, _) in zip(rates_at_ends, spread, strict=True))]))
+    if combined.omega_rad_s > 0 and combined.omega_low_rad_s >= 0:
+        low = max(low, 0.0)  # a scatter carried to an end does not make the rate negative
     high = float(np.nanmax([combined.omega_high_rad_s,
                             *(rate + up for rate, (_, up) in zip(rates_at_ends, spread, strict=True))]))
     return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
