@@ -89,8 +89,10 @@ def camera_at(lens: Lens, size_px: tuple[int, int], fixation_px: tuple[float, fl
 def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg: float, lens: Lens,
               size_px: tuple[int, int]) -> Lens:
     """The focal length (and elevation, unless given) found from the tracks, at a first rate from
-    their recurrence; orthographic when no perspective shows, or when too few tracks turn far
-    enough to tell, or the rate changes over the clip (``estimate`` None)."""
+    their recurrence; orthographic when no perspective shows, and ``unsettled`` (``estimate``
+    None) when too few tracks turn far enough to tell, or the clip's halves turn at different
+    rates both through the orthographic camera and through the lens found (a rate that changes:
+    a lens's model holds one steady rate)."""
     offsets = axes.offsets_along(tracks, fixation_px, angle_deg)
     omega = axes.rate_from_recurrence(tracks, offsets)
     if not (math.isfinite(omega) and omega > 0):
@@ -119,6 +121,15 @@ STEADY_FRACTION = 0.1
 CHANGE_SAMPLES = 200_000
 
 
+def _whole_tracks_evenly(tracks: pd.DataFrame, offsets: np.ndarray) -> tuple[pd.DataFrame, np.ndarray]:
+    """At most about :data:`CHANGE_SAMPLES` samples, whole tracks chosen evenly by number: no
+    copy of a long clip's table."""
+    if len(tracks) <= CHANGE_SAMPLES:
+        return tracks, offsets
+    chosen = tracks["track"].to_numpy() % math.ceil(len(tracks) / CHANGE_SAMPLES) == 0
+    return tracks[chosen], offsets[chosen]
+
+
 def _steady_through(lens: Lens, tracks: pd.DataFrame, offsets: np.ndarray, fixation_px: tuple[float, float],
                     angle_deg: float, size_px: tuple[int, int]) -> bool:
     """True when the clip's halves, measured through ``lens``, turn at one rate (within
@@ -126,9 +137,7 @@ def _steady_through(lens: Lens, tracks: pd.DataFrame, offsets: np.ndarray, fixat
     body. A wide lens makes a short clip's halves differ: a box turned 2.4 rad in 3 s through a
     60-degree lens read 0.90 and 1.00 rad/s orthographically, 0.804 and 0.797 through the 58.6
     degrees found; a spin-up's halves (box_spinup.mp4) differ through any lens."""
-    if len(tracks) > CHANGE_SAMPLES:  # whole tracks, evenly: no copy of a long clip's table
-        chosen = tracks["track"].to_numpy() % math.ceil(len(tracks) / CHANGE_SAMPLES) == 0
-        tracks, offsets = tracks[chosen], offsets[chosen]
+    tracks, offsets = _whole_tracks_evenly(tracks, offsets)
     table = pd.DataFrame({"track": tracks["track"].to_numpy(), "frame": tracks["frame"].to_numpy(),
                           "time_s": tracks["time_s"].to_numpy(), "offset_px": offsets})
     times = table["time_s"].to_numpy()
@@ -147,9 +156,7 @@ def _steady_through(lens: Lens, tracks: pd.DataFrame, offsets: np.ndarray, fixat
 
 def _changing(tracks: pd.DataFrame, offsets: np.ndarray) -> bool:
     """True when the clip's halves turn at clearly different rates (see :data:`STEADY_FRACTION`)."""
-    if len(tracks) > CHANGE_SAMPLES:  # whole tracks, evenly: no copy of a long clip's table
-        chosen = tracks["track"].to_numpy() % math.ceil(len(tracks) / CHANGE_SAMPLES) == 0
-        tracks, offsets = tracks[chosen], offsets[chosen]
+    tracks, offsets = _whole_tracks_evenly(tracks, offsets)
     frame = tracks["frame"].to_numpy()
     early = frame <= np.median(frame)
     rates = [axes.rate_from_recurrence(tracks[part], offsets[part]) for part in (early, ~early)]
