@@ -150,10 +150,11 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                 spanned = True
                 if period.excess > LOOK_ALIKE_EXCESS:
                     omega, rate_from = tracks.omega_rad_s, "tracks"
+                reported = ("the tracks' rate is reported, as the return is not exact" if rate_from == "tracks"
+                            else "the repetition's rate is reported, as the return is exact")
                 notes.append(f"the 95% interval spans both readings: the repetition's {repeated:.4g} rad/s if the "
                              f"picture's return is a turn, the tracks' {tracks.omega_rad_s:.4g} rad/s if it is a "
-                             f"look-alike view; the {'tracks' if rate_from == 'tracks' else 'repetition'}' rate is "
-                             f"reported, as {'the return is not exact' if rate_from == 'tracks' else 'it is exact'}")
+                             f"look-alike view; {reported}")
     if period.drift_s > CHANGE_FRACTION * period.period_s:
         notes.append(f"the rate changes over the clip (its halves repeat {period.drift_s / period.period_s:.1%} "
                      "apart); the result is an average: see omega(t) with --window SECONDS")
