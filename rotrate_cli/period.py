@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -57,6 +57,18 @@ MIN_FIT = 0.3
 #: A repeat whose closest pairs differ by no more than this beyond their timing shows the same
 #: picture again (a merely similar view, a car half a turn on, differs by more).
 SAME_PICTURE = 0.02
+#: Frames a step apart that differ by at least this fraction of the typical difference show a
+#: turn too fast for the frame rate to follow (a wheel or fan turning tens of degrees a frame):
+#: the first closest return may span several turns (:func:`_turns_between`). Measured: a rendered
+#: box 6-19 degrees a frame, 0.44-0.91; the real clips and photographs (5-10 degrees a step),
+#: 0.09-0.32.
+FAR_APART = 1.0 - 0.8 * ALIKE
+#: Harmonics of the turn that describe how a frame's difference from another grows with the angle
+#: between them (a box seen from the side looks alike every quarter turn: its fourth). Measured on
+#: renders 19-170 degrees a frame (28 clips: boxes, and a finely textured disk whose views differ
+#: only near a return): 4 harmonics found the turns of 23 and all the boxes; 2, 3, 6 and 8 found
+#: 6-18; taking each closest return for one turn, 5.
+PROFILE_HARMONICS = 4
 #: Residuals of the differences (in typical differences) are capped here in the fit.
 CAP = 0.3
 #: Points of the tabulated neighbour shape; period candidates scanned coarsely, then finely.
@@ -90,7 +102,14 @@ class Period:
             (a changing rate), seconds.
         excess: what the best-matching pairs differ by beyond what their timing explains (0:
             the same picture again; more: a merely similar view, as a car half a turn on).
-        lag_frames: the repeat in frames as first seen (a whole number).
+        lag_frames: the repeat in frames (the whole number first seen, over ``turns_between``).
+        far_apart: the picture changes almost wholly from one frame to the next
+            (:data:`FAR_APART`): the turn is too fast for the frame rate to follow, so faster
+            turns that land on the same views (a wagon wheel's) cannot be told apart; the rate
+            assumes under half a turn between frames.
+        turns_between: how many repeats the closest return first seen spans (more than 1 only
+            where ``far_apart``: a box 29 degrees a frame looks most alike after 88 frames, 7
+            turns).
     """
 
     period_s: float
@@ -103,6 +122,13 @@ class Period:
     drift_s: float = 0.0
     excess: float = 0.0
     lag_frames: float = math.nan
+    far_apart: bool = False
+    turns_between: int = 1
+
+    @property
+    def step_deg(self) -> float:
+        """How far the picture's repeat turns between frames, degrees (NaN when unknown)."""
+        return 360.0 / self.lag_frames if self.lag_frames > 0 else math.nan
 
     def omega_rad_s(self, multiple: int = 1) -> tuple[float, float, float]:
         """The rate, and its 95% interval, if a turn takes ``multiple`` periods (rad/s)."""
@@ -290,7 +316,43 @@ def find_period(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: flo
     if not fits:
         return None
     best = min(fit.excess for fit in fits)
-    return min((fit for fit in fits if fit.excess <= 2.0 * best + SAME_PICTURE), key=lambda fit: fit.period_s)
+    chosen = min((fit for fit in fits if fit.excess <= 2.0 * best + SAME_PICTURE), key=lambda fit: fit.period_s)
+    if profile[1] < FAR_APART:
+        return chosen
+    turns = _turns_between(profile, times_s, chosen.period_s)
+    return replace(chosen, period_s=chosen.period_s / turns, period_low_s=chosen.period_low_s / turns,
+                   period_high_s=chosen.period_high_s / turns, drift_s=chosen.drift_s / turns,
+                   lag_frames=chosen.lag_frames / turns, repeats=chosen.repeats * turns, far_apart=True,
+                   turns_between=turns)
+
+
+def _turns_between(profile: np.ndarray, times_s: np.ndarray, period_s: float) -> int:
+    """How many repeats a return after ``period_s`` spans, where frames lie far apart on the turn:
+    the whole number ``n`` (under half a repeat a frame) for which the lag profile (the mean
+    difference of frames a lag apart) is best described as a smooth function of the angle turned
+    in a lag, ``2 pi n lag_time / period_s``: a constant and :data:`PROFILE_HARMONICS` cosines of
+    it, by weighted least squares (lags with more pairs weigh more).
+
+    The box turning 29 degrees a frame looks most alike after 88 frames (7 turns, 1 degree
+    off); 25 frames (2 turns, 4 degrees off) is also a valley. Taking 88 frames for one turn
+    read the rate 7 times too slow; a turn of 12.6 frames describes every valley at once. A
+    guess all the same: frames that show only a few distinct views are described as well at
+    other rates (see :data:`PROFILE_HARMONICS`)."""
+    count = len(profile)
+    lags = np.arange(1, max(2, count - 4))
+    gaps_s = np.array([float(np.mean(times_s[lag:] - times_s[:-lag])) for lag in lags])
+    weights = np.sqrt(count - lags)
+    values = profile[lags] * weights
+    step_s = float(np.mean(np.diff(times_s)))
+    most = max(1, int(period_s / (2.0 * step_s)))
+    misfit = np.full(most + 1, np.inf)
+    for turns in range(1, most + 1):
+        angle = 2.0 * math.pi * turns * gaps_s / period_s
+        design = np.column_stack([np.ones_like(angle)] + [np.cos(k * angle) for k in range(1, PROFILE_HARMONICS + 1)])
+        design *= weights[:, None]
+        residual = values - design @ np.linalg.lstsq(design, values, rcond=None)[0]
+        misfit[turns] = float(residual @ residual)
+    return int(np.argmin(misfit))
 
 
 def _pairs_near(count: int, lag0: float, repeats: int, reach: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

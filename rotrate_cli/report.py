@@ -149,6 +149,8 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "repeats_seen": analysis.period.repeats,
             "repeats_per_turn": analysis.verdict.repeats_per_turn if analysis.verdict is not None else 1,
             "likeness": _number(analysis.period.likeness, 4),
+            "far_apart": analysis.period.far_apart,
+            "turns_between": analysis.period.turns_between,
         },
         "direction": analysis.direction,
         "tracks_total": analysis.tracks_total,

@@ -16,6 +16,10 @@ behind) they can be biased while their interval stays narrow. The repetition
   :data:`NEAR_FACTOR`), the object
   may be symmetric and the result is marked weak.
 
+Where the picture changes almost wholly from one frame to the next (a fast wheel, a fan), its
+repeat is told only up to whole turns between frames (:attr:`rotrate_cli.period.Period.far_apart`):
+unless the tracks confirm it, the result is weak.
+
 A picture that comes back only once in the clip may be a view that merely looks alike part of a
 turn on (a car's far side half a turn on), not a turn: where it does not come back exactly
 (:data:`LOOK_ALIKE_EXCESS`), or the tracks turn well under a turn in that time
@@ -138,6 +142,8 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                                  "the tracks' rate tells which")
     omega, low, high = period.omega_rad_s(repeats)
     rate_from, spanned = "repetition", False
+    if period.far_apart and not confirmed:
+        weak.append(_far_apart(period))
     if not confirmed:
         doubt = _look_alike(period, tracks, tracks_used)
         if doubt is not None:
@@ -161,6 +167,16 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not spanned:  # spanned: weak for its doubt already
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, rate_from, repeats, "weak" if weak else "good", tuple(weak), tuple(notes))
+
+
+def _far_apart(period: Period) -> str:
+    """Why a repetition of frames far apart on the turn, unconfirmed by tracks, is weak."""
+    spans = (f"; its closest return, after {period.turns_between} repeats, says how far" if period.turns_between > 1
+             else "")
+    return (f"the picture changes almost wholly from one frame to the next (the repeat turns about "
+            f"{period.step_deg:.0f} degrees a frame{spans}): the rate assumes under half a repeat between frames, "
+            "and no track confirms it; a turn faster by whole turns a frame looks the same (a wagon wheel's); "
+            "a higher frame rate settles it")
 
 
 def _look_alike(period: Period, tracks: Combined | None, tracks_used: int) -> str | None:

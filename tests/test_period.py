@@ -163,3 +163,48 @@ def test_a_doubted_return_gives_an_interval_that_holds_both_readings() -> None:
     # without tracks to weigh, the doubt is a word only (nothing to widen to)
     alone = judge(None, _single_closing(excess=0.25))
     assert alone.rate_from == "repetition" and alone.omega_high_rad_s / alone.omega_low_rad_s < 1.1
+
+
+@pytest.mark.parametrize("step_deg", [29.0, 150.0])
+def test_a_turn_too_fast_for_the_frame_rate_is_counted_from_every_return(step_deg: float) -> None:
+    """A wheel turning tens of degrees a frame: its closest return spans several turns (at 29
+    degrees a frame, 5 turns after 62 frames are 2 degrees off, 1 turn after 12 frames 12). The
+    turn is the one that describes the differences at every lag; the result is weak all the same."""
+    period_s = 360.0 / (step_deg * 30.0)
+    thumbnails = _turning(np.arange(0.0, 3.0, 1 / 30), period_s)
+    found = find_period(thumbnails.times_s, thumbnails.images)
+    assert found is not None
+    assert found.far_apart and found.turns_between > 1
+    assert found.period_s == pytest.approx(period_s, rel=0.01)
+    assert found.period_low_s <= period_s <= found.period_high_s
+    assert found.step_deg == pytest.approx(step_deg, rel=0.01)
+    verdict = judge(None, found)
+    assert verdict.quality == "weak"
+    assert any("wagon wheel" in reason for reason in verdict.weak_because)
+
+
+def test_frames_close_on_the_turn_are_not_far_apart() -> None:
+    thumbnails = _turning(np.arange(0.0, 6.0, 1 / 30), 2.4)  # 5 degrees a frame
+    found = find_period(thumbnails.times_s, thumbnails.images)
+    assert found is not None
+    assert not found.far_apart and found.turns_between == 1
+    assert judge(None, found).quality == "good"
+
+
+def test_a_fast_box_is_measured_from_its_returns_and_marked_weak(tmp_path) -> None:
+    """A rendered box at 15 rad/s filmed at 30 fps (29 degrees a frame): no track lives beyond
+    two frames, and its picture is most alike after 88 frames, 7 turns. Read as one turn that
+    was 2.14 rad/s, called good."""
+    from rotrate_cli.analysis import AnalysisConfig, analyze
+    from rotrate_cli.synth import Renderer, SceneConfig
+
+    scene = SceneConfig(shape="box", omega_rad_s=15.0, fps=30.0, duration_s=3.0, supersample=1, seed=3)
+    renderer = Renderer(scene)
+    clip = tmp_path / "fast_box.mp4"
+    writer = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"mp4v"), scene.fps, (scene.width_px, scene.height_px))
+    for k in range(scene.frame_count):
+        writer.write(renderer.render(k))
+    writer.release()
+    result = analyze(clip, AnalysisConfig(fixation_px=None))
+    assert result.omega_rad_s == pytest.approx(15.0, rel=0.01)
+    assert result.verdict.quality == "weak"
