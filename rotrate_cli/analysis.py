@@ -47,6 +47,7 @@ from rotrate_cli.rates import Camera
 from rotrate_cli.reasons import name_rejections, track_places
 from rotrate_cli.segment import Body
 from rotrate_cli.series import rate_series
+from rotrate_cli.steady import Shake
 from rotrate_cli.verdict import Verdict, judge
 from rotrate_cli.view import View, keep_for_view
 
@@ -102,6 +103,8 @@ class Analysis:
             too few tracks follow a turning path to tell.
         camera: the pinhole model the tracks' rates were measured through, or None
             (orthographic).
+        shake: a hand-held camera's shake, taken out of the tracks (:mod:`rotrate_cli.steady`);
+            None where none showed.
 
     ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
     a long clip's table is large, and most reports do not need it.
@@ -139,6 +142,7 @@ class Analysis:
     camera_from: str = "orthographic"
     view: View | None = None
     camera: Camera | None = None
+    shake: Shake | None = None
 
     @property
     def quality(self) -> str:
@@ -283,7 +287,7 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         axis_angle_found=geometry.angle_from in ("motion", "paths"),
         axis_angle_from=geometry.angle_from if geometry.angle_from in ("motion", "paths") else config.angle_from,
         elevation_deg=geometry.elevation_deg, verdict=verdict, period=period, clock=footage.info.clock,
-        camera_from=geometry.lens.source, view=geometry.view, **measured_by,  # type: ignore[arg-type]
+        camera_from=geometry.lens.source, view=geometry.view, shake=footage.shake, **measured_by,  # type: ignore[arg-type]
     )
 
 

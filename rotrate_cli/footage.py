@@ -27,6 +27,7 @@ from rotrate_cli.fits import no_result_message
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.period import Thumbnails
+from rotrate_cli.steady import CameraPath, Shake, find_shake
 from rotrate_cli.tracking import (
     VIDEO_BLUR_SIGMA_PX,
     TrackerConfig,
@@ -66,6 +67,8 @@ class Footage:
             the given ``--axis-angle`` where there is one; NaN where too few tracks
             (:data:`MIN_TRACKS_FOR_ANGLE`) tell.
         warnings: what the user should know from decoding and tracking.
+        shake: the hand-held camera's shake taken out of the tracks (:mod:`rotrate_cli.steady`);
+            None where none showed.
     """
 
     info: VideoInfo
@@ -75,6 +78,7 @@ class Footage:
     duration_s: float
     motion_angle_deg: float
     warnings: tuple[str, ...] = ()
+    shake: Shake | None = None
 
 
 def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None = None) -> Footage:
@@ -105,27 +109,40 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     _check_tracked(run, thumbnails, source)
     tracks = by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
+    shaken = None if config.points_px else find_shake(tracks, run.frames, 1.0 / tracking_scale(info.width_px, tracker))
+    if shaken is not None:
+        # a hand-held camera: track again knowing its motion, so that the still background is let
+        # go of as on a tripod and the points go to the body; the positions as a still camera saw them
+        thumbnails.clear()
+        run = _track(video, config, tracker, progress, thumbnails, shaken[0])
+        tracks = shaken[0].steady(by_track(run.tracks))
     angle = config.axis_angle_deg if config.axis_angle_deg is not None else math.nan
     if config.axis_angle_deg is None and tracks["track"].nunique() >= MIN_TRACKS_FOR_ANGLE:
         angle = axes.motion_angle_deg(tracks)
         if across(angle):
             # the motion runs up and down the image: track again with the window turned to suit it
             thumbnails.clear()
-            run = _track(video, config, turned(tracker), progress, thumbnails)
+            camera = None if shaken is None else shaken[0]
+            run = _track(video, config, turned(tracker), progress, thumbnails, camera)
             if run.tracks.empty:
                 raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
-            tracks = by_track(run.tracks)
+            tracks = by_track(run.tracks) if camera is None else camera.steady(by_track(run.tracks))
             angle = axes.motion_angle_deg(tracks)
         angle = angle if math.isfinite(angle) else 0.0
     # the decoder may have learnt something while it read (a stream OpenCV decodes black)
     warnings += [warning for warning in video.warnings if warning not in warnings]
     notes = list(run.notes) + warnings
+    shake = None if shaken is None else shaken[1]
+    if shake is not None:
+        notes.append(f"the camera shook ({shake.rms_px:.1f} px rms, at most {shake.largest_px:.1f} px): the tracks are "
+                     f"measured as a still camera would see them, from {shake.background_tracks} still background "
+                     "tracks")
     if config.start_s == 0 and config.end_s is None:
         short = video.shortfall(run.frames, run.last_time_s)
         if short is not None:
             notes.append(short)
     return Footage(info, tracks, thumbnails, run.frames, run.last_time_s - run.first_time_s, float(angle),
-                   tuple(notes))
+                   tuple(notes), shake)
 
 
 def _check_against_frames(config: AnalysisConfig, info: VideoInfo) -> list[str]:
@@ -182,14 +199,16 @@ def turned(tracker: TrackerConfig) -> TrackerConfig:
 
 
 def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
-           progress: ProgressCallback | None, thumbnails: Thumbnails) -> TrackingRun:
+           progress: ProgressCallback | None, thumbnails: Thumbnails, camera: CameraPath | None = None) -> TrackingRun:
     """Decode (in a background thread) and track the frames of ``video`` between start and end,
-    keeping a thumbnail of each in ``thumbnails``."""
+    keeping a thumbnail of each in ``thumbnails``; ``camera``: its own motion, where known."""
     info = video.info
     scale = tracking_scale(info.width_px, tracker)
     blur = tracker.blur_sigma_px
     if blur is None:
         blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
+    if tracker.retry_lost is None:
+        tracker = replace(tracker, retry_lost=not info.is_image_sequence)
     # the luma table is known once the stream has read (and checked) its first frame
     frames = video.frames(config.start_s, config.end_s, grey=True, map_luma=False,
                           transform=lambda image: tracking_image(image, scale, blur, video.luma_levels()))
@@ -200,5 +219,5 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     if config.points_px:
         return follow_points(stream, size_px, list(config.points_px), config.tracker_kind, tracker, notify)
     if config.tracker_kind == "csrt":
-        return track_frames(stream, size_px, csrt_settings(tracker), notify, kind=CsrtTracker)
-    return track_frames(stream, size_px, tracker, notify)
+        return track_frames(stream, size_px, csrt_settings(tracker), notify, kind=CsrtTracker, camera=camera)
+    return track_frames(stream, size_px, tracker, notify, camera=camera)

@@ -152,6 +152,10 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "far_apart": analysis.period.far_apart,
             "turns_between": analysis.period.turns_between,
         },
+        "shake": None if analysis.shake is None else {
+            "rms_px": _number(analysis.shake.rms_px, 3), "largest_px": _number(analysis.shake.largest_px, 3),
+            "background_tracks": analysis.shake.background_tracks,
+        },
         "direction": analysis.direction,
         "tracks_total": analysis.tracks_total,
         "tracks_used": analysis.tracks_used,
