@@ -209,6 +209,9 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
         blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
     if tracker.retry_lost is None:
         tracker = replace(tracker, retry_lost=not info.is_image_sequence)
+    if tracker.steady_light is None:
+        tracker = replace(tracker, steady_light=not info.is_image_sequence)
+    thumbnails.steady_light = not info.is_image_sequence
     # the luma table is known once the stream has read (and checked) its first frame
     frames = video.frames(config.start_s, config.end_s, grey=True, map_luma=False,
                           transform=lambda image: tracking_image(image, scale, blur, video.luma_levels()))

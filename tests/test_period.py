@@ -208,3 +208,19 @@ def test_a_fast_box_is_measured_from_its_returns_and_marked_weak(tmp_path) -> No
     result = analyze(clip, AnalysisConfig(fixation_px=None))
     assert result.omega_rad_s == pytest.approx(15.0, rel=0.01)
     assert result.verdict.quality == "weak"
+
+
+def test_a_light_flickering_with_the_mains_is_not_taken_for_the_turn() -> None:
+    """50 Hz lights seen at 30 frames/s flicker at 10 Hz: the picture's brightness repeats every
+    3 frames. At 15% that was taken for the turn (62.8 rad/s for 2)."""
+    times = np.arange(0.0, 8.0, 1 / 30)
+    clean = _turning(times, 3.1416)
+    flickering = Thumbnails(steady_light=True)
+    frames = [Frame(k, float(t), np.clip(image.reshape(64, 64).astype(np.float32)
+                                         * (1 + 0.15 * math.sin(2 * math.pi * 10 * t)), 0, 255).astype(np.uint8))
+              for k, (t, image) in enumerate(zip(clean.times_s, clean.images, strict=True))]
+    for _ in flickering.tap(iter(frames)):
+        pass
+    found = find_period(flickering.times_s, flickering.images)
+    assert found is not None
+    assert found.period_s == pytest.approx(3.1416, rel=0.005)
