@@ -121,26 +121,19 @@ class CameraPath:
     def _at(self, frame: np.ndarray | int) -> np.ndarray | int:
         return np.clip(np.asarray(frame) - self.first_frame, 0, len(self.angle_rad) - 1)
 
-    def undo(self, frame: np.ndarray, x: np.ndarray, y: np.ndarray,
-             to_mean: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        """Positions seen at frames ``frame`` carried back to the first frame's picture, or with
-        ``to_mean`` to the camera's mean position."""
+    def undo(self, frame: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions seen at frames ``frame`` carried back to the first frame's picture."""
         at = self._at(frame)
         angle, shift = self.angle_rad[at], self.shift_px[at]
         cos, sin = np.cos(angle), np.sin(angle)
         dx, dy = x - shift[..., 0], y - shift[..., 1]
-        x0, y0 = cos * dx + sin * dy, -sin * dx + cos * dy
-        if not to_mean:
-            return x0, y0
-        mean_angle = float(np.mean(self.angle_rad))
-        mean_shift = self.shift_px.mean(axis=0)
-        c, s = math.cos(mean_angle), math.sin(mean_angle)
-        return c * x0 - s * y0 + mean_shift[0], s * x0 + c * y0 + mean_shift[1]
+        return cos * dx + sin * dy, -sin * dx + cos * dy
 
     def steady(self, tracks: pd.DataFrame) -> pd.DataFrame:
-        """``tracks`` (``frame, x_px, y_px``) as a camera held at its mean position saw them."""
+        """``tracks`` (``frame, x_px, y_px``) as the camera saw them from where it stood at the
+        first analysed frame (where ``--fixation`` and ``--points`` are read)."""
         x, y = self.undo(tracks["frame"].to_numpy(), tracks["x_px"].to_numpy(dtype=np.float64),
-                         tracks["y_px"].to_numpy(dtype=np.float64), to_mean=True)
+                         tracks["y_px"].to_numpy(dtype=np.float64))
         return tracks.assign(x_px=x.astype(tracks["x_px"].dtype), y_px=y.astype(tracks["y_px"].dtype))
 
     def between(self, frame_a: int, frame_b: int, scale: float = 1.0) -> np.ndarray:
