@@ -48,7 +48,7 @@ from rotrate_cli.reasons import name_rejections, track_places
 from rotrate_cli.segment import Body
 from rotrate_cli.series import rate_series
 from rotrate_cli.steady import Shake
-from rotrate_cli.verdict import Verdict, judge
+from rotrate_cli.verdict import Verdict, judge, turns_between
 from rotrate_cli.view import View, keep_for_view
 
 __all__ = ["Analysis", "AnalysisConfig", "ProgressCallback", "analyze", "analyze_tracks", "rates_from_offsets",
@@ -265,7 +265,10 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     combined = result.combined
     if combined.tracks_used == 0 and period is None:
         raise NoResultError(no_result_message(result.features))
-    verdict = judge(combined if combined.tracks_used > 0 else None, period, combined.tracks_used, checked.doubts)
+    tracks_rate = combined if combined.tracks_used > 0 else None
+    if period is not None:
+        period = turns_between(period, tracks_rate, combined.tracks_used)
+    verdict = judge(tracks_rate, period, combined.tracks_used, checked.doubts)
     size_px = (footage.info.width_px, footage.info.height_px)
     if view_tracks is not None:
         geometry = settle_view(geometry, view_tracks, verdict.omega_rad_s, verdict.rate_from, size_px)

@@ -106,12 +106,15 @@ class Period:
             the same picture again; more: a merely similar view, as a car half a turn on).
         lag_frames: the repeat in frames (the whole number first seen, over ``turns_between``).
         far_apart: the picture changes almost wholly from one frame to the next
-            (:data:`FAR_APART`): the turn is too fast for the frame rate to follow, so faster
-            turns that land on the same views (a wagon wheel's) cannot be told apart; the rate
-            assumes under half a turn between frames.
-        turns_between: how many repeats the closest return first seen spans (more than 1 only
-            where ``far_apart``: a box 29 degrees a frame looks most alike after 88 frames, 7
-            turns).
+            (:data:`FAR_APART`): a turn too fast for the frame rate to follow (faster turns that
+            land on the same views, a wagon wheel's, cannot be told apart), or a fine texture
+            that changes wholly with a small turn. The closest return may then span several
+            repeats (:meth:`over`).
+        turns_guess: where ``far_apart``, how many repeats the closest return spans as the lag
+            profile alone says (:func:`_turns_between`): a box 29 degrees a frame looks most
+            alike after 88 frames, 7 turns.
+        turns_between: how many repeats the closest return first seen spans, as taken
+            (:meth:`over`; 1 until then).
     """
 
     period_s: float
@@ -125,7 +128,18 @@ class Period:
     excess: float = 0.0
     lag_frames: float = math.nan
     far_apart: bool = False
+    turns_guess: int = 1
     turns_between: int = 1
+
+    def over(self, turns: int) -> Period:
+        """The repetition where the closest return spans ``turns`` repeats."""
+        if turns == self.turns_between:
+            return self
+        ratio = self.turns_between / turns
+        return replace(self, period_s=self.period_s * ratio, period_low_s=self.period_low_s * ratio,
+                       period_high_s=self.period_high_s * ratio, drift_s=self.drift_s * ratio,
+                       lag_frames=self.lag_frames * ratio, repeats=max(1, round(self.repeats / ratio)),
+                       turns_between=turns)
 
     @property
     def step_deg(self) -> float:
@@ -334,11 +348,7 @@ def find_period(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: flo
     chosen = min((fit for fit in fits if fit.excess <= 2.0 * best + SAME_PICTURE), key=lambda fit: fit.period_s)
     if profile[1] < FAR_APART:
         return chosen
-    turns = _turns_between(profile, times_s, chosen.period_s)
-    return replace(chosen, period_s=chosen.period_s / turns, period_low_s=chosen.period_low_s / turns,
-                   period_high_s=chosen.period_high_s / turns, drift_s=chosen.drift_s / turns,
-                   lag_frames=chosen.lag_frames / turns, repeats=chosen.repeats * turns, far_apart=True,
-                   turns_between=turns)
+    return replace(chosen, far_apart=True, turns_guess=_turns_between(profile, times_s, chosen.period_s))
 
 
 def _turns_between(profile: np.ndarray, times_s: np.ndarray, period_s: float) -> int:

@@ -37,6 +37,13 @@ SHAKE_PX = 0.3
 #: ... nor one whose frame-to-frame change of step (rms, tracking pixels) is under this: a hand's
 #: shake jolts, while points of a turning body move smoothly together.
 JOLT_PX = 0.15
+#: ... and the jolts must stand this many times above the path's own noise, and be this share of
+#: the path's rms at least. Points of a turning body that move together (the top of a cylinder
+#: seen from 60 degrees above turns as one picture) give a smooth path, 10-19 px rms, whose
+#: jolts are its noise (0.16 px, 0.01 of its rms): on two such renders the shake "found" took
+#: the body's turn out. A hand's: a rendered 2-7 px shake, 0.9 of its rms.
+JOLT_NOISE = 3.0
+JOLT_SHARE = 0.05
 #: Rounds of (path, background) found in turn.
 ROUNDS = 4
 
@@ -104,7 +111,10 @@ def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0) -> tupl
     rms = float(np.sqrt(np.mean(distance ** 2)))
     # a hand's shake jolts from frame to frame; a patch of the body moves smoothly with its turn
     jolt = float(np.sqrt(np.mean((np.diff(shifted, 2, axis=0) ** 2).sum(axis=1)))) if len(shifted) > 2 else 0.0
-    if rms < SHAKE_PX * pixel_px or jolt < JOLT_PX * pixel_px:
+    # the path's own noise, from the background's scatter about it, jolts too (sqrt 6 for a second
+    # difference of independent errors)
+    noise = math.sqrt(6.0) * float(np.median(spread[background])) / math.sqrt(background.sum())
+    if rms < SHAKE_PX * pixel_px or jolt < max(JOLT_PX * pixel_px, JOLT_NOISE * noise, JOLT_SHARE * rms):
         return None
     return path, Shake(rms, float(distance.max()), jolt, int(background.sum()))
 

@@ -16,9 +16,10 @@ behind) they can be biased while their interval stays narrow. The repetition
   :data:`NEAR_FACTOR`), the object
   may be symmetric and the result is marked weak.
 
-Where the picture changes almost wholly from one frame to the next (a fast wheel, a fan), its
-repeat is told only up to whole turns between frames (:attr:`rotrate_cli.period.Period.far_apart`):
-unless the tracks confirm it, the result is weak.
+Where the picture changes almost wholly from one frame to the next (a fast wheel, a fan; or a fine
+texture), its repeat is told only up to whole turns between frames
+(:attr:`rotrate_cli.period.Period.far_apart`): the tracks count the turns where they gave a rate
+(:func:`turns_between`), and unless their interval tells the count, the result is weak.
 
 A picture that comes back only once in the clip may be a view that merely looks alike part of a
 turn on (a car's far side half a turn on), not a turn: where it does not come back exactly
@@ -142,7 +143,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                                  "the tracks' rate tells which")
     omega, low, high = period.omega_rad_s(repeats)
     rate_from, spanned = "repetition", False
-    if period.far_apart and not confirmed:
+    if period.far_apart and not confirmed and not _tracks_count_turns(period, omega, tracks, tracks_used):
         weak.append(_far_apart(period))
     if not confirmed:
         doubt = _look_alike(period, tracks, tracks_used)
@@ -167,6 +168,34 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not spanned:  # spanned: weak for its doubt already
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, rate_from, repeats, "weak" if weak else "good", tuple(weak), tuple(notes))
+
+
+def turns_between(period: Period, tracks: Combined | None, tracks_used: int = 0) -> Period:
+    """The repetition with the number of repeats its closest return spans taken, where its frames
+    lie far apart on the turn (:attr:`rotrate_cli.period.Period.far_apart`): as the tracks' rate
+    says where they gave one (points followed from frame to frame turned by small steps), else
+    as the lag profile alone says. A finely textured sphere turning 6 degrees a frame changes as
+    wholly from one frame to the next as a box turning 29: the profile took two turns for its
+    one (+100%), its tracks one."""
+    if not period.far_apart:
+        return period
+    if tracks is not None and tracks_used >= MIN_TRACKS and 0 < tracks.omega_rad_s < math.inf:
+        most = max(1, int(period.lag_frames * period.turns_between / 2))
+        spans = tracks.omega_rad_s / period.over(1).omega_rad_s()[0]
+        return period.over(min(max(1, round(spans)), most))
+    return period.over(period.turns_guess)
+
+
+def _tracks_count_turns(period: Period, omega_rad_s: float, tracks: Combined | None, tracks_used: int) -> bool:
+    """True where the tracks' interval, if not narrow enough to confirm the rate (or off it), still
+    tells how many repeats a return far apart spans: it lies within half a repeat of the rate (a
+    rendered sphere through a 50-degree lens: its tracks' 3.67 rad/s, +22%, tell one turn from two
+    of the repetition's 3.00)."""
+    if tracks is None or tracks_used < MIN_TRACKS or not 0 < tracks.omega_rad_s < math.inf:
+        return False
+    turns = period.turns_between
+    return omega_rad_s * (turns - 0.5) / turns < tracks.omega_low_rad_s <= tracks.omega_high_rad_s < (
+        omega_rad_s * (turns + 0.5) / turns)
 
 
 def _far_apart(period: Period) -> str:

@@ -11,8 +11,8 @@ import pytest
 
 from rotrate_cli.decode import Frame
 from rotrate_cli.outliers import Combined
-from rotrate_cli.period import Thumbnails, find_period
-from rotrate_cli.verdict import judge
+from rotrate_cli.period import Period, Thumbnails, find_period
+from rotrate_cli.verdict import judge, turns_between
 
 
 def _turning(times_s: np.ndarray, period_s: float, symmetry: int = 1, size: int = 96, seed: int = 7) -> Thumbnails:
@@ -172,9 +172,11 @@ def test_a_turn_too_fast_for_the_frame_rate_is_counted_from_every_return(step_de
     turn is the one that describes the differences at every lag; the result is weak all the same."""
     period_s = 360.0 / (step_deg * 30.0)
     thumbnails = _turning(np.arange(0.0, 3.0, 1 / 30), period_s)
-    found = find_period(thumbnails.times_s, thumbnails.images)
-    assert found is not None
-    assert found.far_apart and found.turns_between > 1
+    closest = find_period(thumbnails.times_s, thumbnails.images)
+    assert closest is not None
+    assert closest.far_apart and closest.turns_guess > 1
+    found = turns_between(closest, None)  # no track: the lag profile's count
+    assert found.turns_between == closest.turns_guess
     assert found.period_s == pytest.approx(period_s, rel=0.01)
     assert found.period_low_s <= period_s <= found.period_high_s
     assert found.step_deg == pytest.approx(step_deg, rel=0.01)
@@ -188,7 +190,20 @@ def test_frames_close_on_the_turn_are_not_far_apart() -> None:
     found = find_period(thumbnails.times_s, thumbnails.images)
     assert found is not None
     assert not found.far_apart and found.turns_between == 1
+    assert turns_between(found, Combined(0.5, 0.49, 0.51, 20), 20) is found
     assert judge(None, found).quality == "good"
+
+
+def test_where_frames_differ_wholly_the_tracks_count_the_turns() -> None:
+    """A fine texture changes wholly from one frame to the next although it turns 6 degrees a
+    frame (rendered spheres and cylinders at 3 rad/s): the lag profile alone may count two turns
+    for one; the tracks, followed by small steps, count one."""
+    closest = Period(2.0, 1.99, 2.01, 3, 180, 0.1, 0.8, lag_frames=60.0, far_apart=True, turns_guess=2)
+    tracks = Combined(2 * math.pi / 2.0 * 1.02, 3.0, 3.3, 40)  # one turn in 2 s, as the tracks say
+    assert turns_between(closest, tracks, 40).period_s == pytest.approx(2.0)
+    assert turns_between(closest, None).period_s == pytest.approx(1.0)
+    seven = turns_between(closest, Combined(7 * math.pi, 21.0, 23.0, 40), 40)
+    assert seven.turns_between == 7 and seven.period_s == pytest.approx(2.0 / 7)
 
 
 def test_a_fast_box_is_measured_from_its_returns_and_marked_weak(tmp_path) -> None:
