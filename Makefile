@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow test-floor lint bench bench-memory bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random clean
+.PHONY: demo test test-slow test-floor lint bench bench-memory bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -70,6 +70,10 @@ bench-accuracy-given-fov: $(STAMP)
 ## bench-accuracy-reseed: the same 17 conditions rendered with other seeds (other textures and noise; about 5 minutes the first time)
 bench-accuracy-reseed: $(STAMP)
 	$(BIN)/python benchmarks/bench_accuracy.py --reseed 1000
+
+## bench-hard: a hand's shake, flickering light, turns of tens of degrees a frame and motion blur done to renders, measured with default settings (about 3 minutes the first time)
+bench-hard: $(STAMP)
+	$(BIN)/python benchmarks/bench_hard.py
 
 ## bench-random: 20 random rendered conditions (lenses to 75 degrees, 2-6 s, elevation to 60) measured with default settings and --fixation auto (about 10 minutes the first time)
 bench-random: $(STAMP)

@@ -144,7 +144,14 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
     omega, low, high = period.omega_rad_s(repeats)
     rate_from, spanned = "repetition", False
     if period.far_apart and not confirmed and not _tracks_count_turns(period, omega, tracks, tracks_used):
+        # how many repeats the closest return spans is a guess: the interval holds every count,
+        # from one to under half a repeat a frame (rendered boxes at 10 and 25 rad/s, 30 frames/s,
+        # no track: the guesses read +100% and +255%)
         weak.append(_far_apart(period))
+        most = max(1, int(period.lag_frames * period.turns_between / 2))
+        low = min(low, period.over(1).omega_rad_s(repeats)[1])
+        high = max(high, period.over(most).omega_rad_s(repeats)[2])
+        spanned = True
     if not confirmed:
         doubt = _look_alike(period, tracks, tracks_used)
         if doubt is not None:
@@ -203,9 +210,9 @@ def _far_apart(period: Period) -> str:
     spans = (f"; its closest return, after {period.turns_between} repeats, says how far" if period.turns_between > 1
              else "")
     return (f"the picture changes almost wholly from one frame to the next (the repeat turns about "
-            f"{period.step_deg:.0f} degrees a frame{spans}): the rate assumes under half a repeat between frames, "
-            "and no track confirms it; a turn faster by whole turns a frame looks the same (a wagon wheel's); "
-            "a higher frame rate settles it")
+            f"{period.step_deg:.0f} degrees a frame{spans}): how many repeats its closest return spans is a guess, "
+            "and no track tells it; the 95% interval holds every count up to half a repeat a frame, and a turn "
+            "faster by whole turns a frame looks the same (a wagon wheel's); a higher frame rate settles it")
 
 
 def _look_alike(period: Period, tracks: Combined | None, tracks_used: int) -> str | None:

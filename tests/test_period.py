@@ -183,6 +183,9 @@ def test_a_turn_too_fast_for_the_frame_rate_is_counted_from_every_return(step_de
     verdict = judge(None, found)
     assert verdict.quality == "weak"
     assert any("wagon wheel" in reason for reason in verdict.weak_because)
+    # the count is a guess: the interval holds every count, from one repeat to half a turn a frame
+    assert verdict.omega_low_rad_s <= 2 * math.pi / closest.period_s
+    assert verdict.omega_high_rad_s >= 0.99 * math.pi * 30
 
 
 def test_frames_close_on_the_turn_are_not_far_apart() -> None:
@@ -223,6 +226,7 @@ def test_a_fast_box_is_measured_from_its_returns_and_marked_weak(tmp_path) -> No
     result = analyze(clip, AnalysisConfig(fixation_px=None))
     assert result.omega_rad_s == pytest.approx(15.0, rel=0.01)
     assert result.verdict.quality == "weak"
+    assert result.omega_low_rad_s <= 15.0 <= result.omega_high_rad_s
 
 
 def test_a_light_flickering_with_the_mains_is_not_taken_for_the_turn() -> None:
