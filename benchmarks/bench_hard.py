@@ -33,13 +33,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from rotrate_cli.analysis import AnalysisConfig, analyze  # noqa: E402
-from rotrate_cli.errors import RotrateError  # noqa: E402
+from benchmarks.scoring import print_scored, scored  # noqa: E402
 from rotrate_cli.synth import Renderer, SceneConfig  # noqa: E402
 
 OUT = ROOT / "bench_out" / "hard"
-#: Errors above this, as a fraction, must come with ``weak``.
-UNMARKED_LIMIT = 0.05
 
 
 @dataclass(frozen=True)
@@ -112,23 +109,7 @@ def render(condition: Condition, path: Path) -> dict:
 def measure(condition: Condition) -> dict[str, object]:
     path = OUT / f"{condition.name}.mp4"
     truth = json.loads(path.with_suffix(".json").read_text()) if path.exists() else render(condition, path)
-    true_omega = float(truth["omega_rad_s"])
-    row: dict[str, object] = {"clip": condition.name, "truth": true_omega}
-    try:
-        result = analyze(path, AnalysisConfig(fixation_px=None))
-    except RotrateError as error:
-        row.update(omega=math.nan, error_pct=math.nan, low_pct=math.nan, high_pct=math.nan, covers=False,
-                   quality="none", sense="-", note=str(error)[:60])
-        return row
-    sense = "right" if result.direction == truth["direction"] else result.direction
-    row.update(
-        omega=result.omega_rad_s, error_pct=100 * (result.omega_rad_s / true_omega - 1),
-        low_pct=100 * (result.omega_low_rad_s / true_omega - 1),
-        high_pct=100 * (result.omega_high_rad_s / true_omega - 1),
-        covers=bool(result.omega_low_rad_s <= true_omega <= result.omega_high_rad_s), quality=result.quality,
-        sense=sense, note=result.rate_from + ("; shake found" if result.shake is not None else ""),
-    )
-    return row
+    return {"clip": condition.name, "truth": float(truth["omega_rad_s"]), **scored(path, truth)}
 
 
 def main() -> int:
@@ -138,21 +119,8 @@ def main() -> int:
     OUT.mkdir(parents=True, exist_ok=True)
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         rows = list(pool.map(measure, CONDITIONS))
-    header = (f"{'clip':<26} {'truth':>6} {'omega':>8} {'error':>8} {'95% interval':>18} {'covers':>6} "
-              f"{'quality':>7} {'sense':>7}  from")
-    print(header)
-    print("-" * len(header))
-    for row in rows:
-        interval = f"[{row['low_pct']:+.2f}, {row['high_pct']:+.2f}]"
-        print(f"{row['clip']:<26} {row['truth']:>6g} {row['omega']:>8.4f} {row['error_pct']:>+7.2f}% {interval:>18} "
-              f"{'yes' if row['covers'] else 'NO':>6} {row['quality']:>7} {row['sense']:>7}  {row['note']}")
-    covered = sum(bool(row["covers"]) for row in rows)
-    unmarked = sum(abs(float(row["error_pct"])) > 100 * UNMARKED_LIMIT and row["quality"] == "good" for row in rows)
-    wrong = sum(row["sense"] in ("cw", "ccw") for row in rows)
-    print(f"\nclips {len(rows)}; intervals covering the truth {covered}; off by more than {100 * UNMARKED_LIMIT:.0f}% "
-          f"and not marked weak {unmarked}; sense wrong {wrong}")
-    return 0 if unmarked == 0 and wrong == 0 and covered == len(rows) else 1
-
+    leads = [f"{row['clip']:<26} {row['truth']:>6g} {row['omega']:>8.4f}" for row in rows]
+    return 0 if print_scored(f"{'clip':<26} {'truth':>6} {'omega':>8}", leads, rows) else 1
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -24,13 +24,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from rotrate_cli.analysis import AnalysisConfig, analyze  # noqa: E402
-from rotrate_cli.errors import RotrateError  # noqa: E402
+from benchmarks.scoring import print_scored, scored  # noqa: E402
 from rotrate_cli.synth import SceneConfig, write_clip  # noqa: E402
 
 OUT = ROOT / "bench_out" / "random"
-#: Errors above this, as a fraction, must come with ``weak``.
-UNMARKED_LIMIT = 0.05
 
 
 def condition(index: int, seed: int) -> SceneConfig:
@@ -54,24 +51,12 @@ def measure(item: tuple[int, SceneConfig]) -> dict[str, object]:
     index, scene = item
     path = OUT / f"random-{scene.seed}.mp4"
     truth = json.loads(path.with_suffix(".json").read_text()) if path.exists() else write_clip(scene, path, force=True)
-    true_omega = float(truth["omega_rad_s"])
     row: dict[str, object] = {
         "clip": path.stem, "shape": scene.shape, "omega": scene.omega_rad_s, "s": scene.duration_s,
         "lens": f"{scene.fov_deg:g}" if scene.projection == "perspective" else "ortho",
         "elevation": scene.elevation_deg, "noise": scene.noise_sigma, "jpeg": scene.jpeg_quality or "-",
     }
-    try:
-        result = analyze(path, AnalysisConfig(fixation_px=None))
-    except RotrateError as error:
-        row.update(error_pct=math.nan, low_pct=math.nan, high_pct=math.nan, covers=False, quality="none",
-                   sense="-", note=str(error)[:60])
-        return row
-    row.update(
-        error_pct=100 * (result.omega_rad_s / true_omega - 1), low_pct=100 * (result.omega_low_rad_s / true_omega - 1),
-        high_pct=100 * (result.omega_high_rad_s / true_omega - 1),
-        covers=bool(result.omega_low_rad_s <= true_omega <= result.omega_high_rad_s), quality=result.quality,
-        sense="right" if result.direction == truth["direction"] else result.direction, note=result.rate_from,
-    )
+    row.update({key: value for key, value in scored(path, truth).items() if key != "omega"})
     return row
 
 
@@ -85,24 +70,11 @@ def main() -> int:
     items = [(k, condition(k, args.seed)) for k in range(args.count)]
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         rows = list(pool.map(measure, items))
-    header = (f"{'clip':<14} {'shape':<8} {'omega':>5} {'s':>3} {'lens':>5} {'elev':>4} {'noise':>5} {'jpeg':>4} "
-              f"{'error':>8} {'95% interval':>18} {'covers':>6} {'quality':>7} {'sense':>7}  from")
-    print(header)
-    print("-" * len(header))
-    for row in rows:
-        interval = f"[{row['low_pct']:+.2f}, {row['high_pct']:+.2f}]"
-        print(f"{row['clip']:<14} {row['shape']:<8} {row['omega']:>5g} {row['s']:>3g} {row['lens']:>5} "
-              f"{row['elevation']:>4g} {row['noise']:>5g} {row['jpeg']!s:>4} {row['error_pct']:>+7.2f}% {interval:>18} "
-              f"{'yes' if row['covers'] else 'NO':>6} {row['quality']:>7} {row['sense']:>7}  {row['note']}")
-    covered = sum(bool(row["covers"]) for row in rows)
-    unmarked = sum(abs(float(row["error_pct"])) > 100 * UNMARKED_LIMIT and row["quality"] == "good" for row in rows)
-    wrong = sum(row["sense"] in ("cw", "ccw") for row in rows)
-    good = [row for row in rows if row["quality"] == "good"]
-    print(f"\nclips {len(rows)}; intervals covering the truth {covered} ({100 * covered / max(len(rows), 1):.0f}%); "
-          f"good {len(good)} (covering {sum(bool(r['covers']) for r in good)}); off by more than "
-          f"{100 * UNMARKED_LIMIT:.0f}% and not marked weak {unmarked}; sense wrong {wrong}")
-    return 0 if unmarked == 0 and wrong == 0 and covered == len(rows) else 1
-
+    leads = [f"{row['clip']:<14} {row['shape']:<8} {row['omega']:>5g} {row['s']:>3g} {row['lens']:>5} "
+             f"{row['elevation']:>4g} {row['noise']:>5g} {row['jpeg']!s:>4}" for row in rows]
+    header = (f"{'clip':<14} {'shape':<8} {'omega':>5} {'s':>3} {'lens':>5} {'elev':>4} {'noise':>5} "
+              f"{'jpeg':>4}")
+    return 0 if print_scored(header, leads, rows) else 1
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -1,0 +1,69 @@
+"""How the benchmarks on rendered clips score a result as a new user would get it (``analyze
+--fixation auto``): error, interval, coverage, quality, sense; and their summary line."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from rotrate_cli.analysis import AnalysisConfig, analyze
+from rotrate_cli.errors import RotrateError
+
+#: Errors above this, as a fraction, must come with ``weak``.
+UNMARKED_LIMIT = 0.05
+
+
+def scored(path: Path, truth: dict) -> dict[str, object]:
+    """``analyze`` on ``path`` with default settings, scored against ``truth`` (``omega_rad_s``,
+    ``direction``); an error the tool gave scores as a miss, with its message."""
+    true_omega = float(truth["omega_rad_s"])
+    try:
+        result = analyze(path, AnalysisConfig(fixation_px=None))
+    except RotrateError as error:
+        return {"omega": math.nan, "error_pct": math.nan, "low_pct": math.nan, "high_pct": math.nan, "covers": False,
+                "quality": "none", "sense": "-", "note": str(error)[:60]}
+    return {
+        "omega": result.omega_rad_s, "error_pct": 100 * (result.omega_rad_s / true_omega - 1),
+        "low_pct": 100 * (result.omega_low_rad_s / true_omega - 1),
+        "high_pct": 100 * (result.omega_high_rad_s / true_omega - 1),
+        "covers": bool(result.omega_low_rad_s <= true_omega <= result.omega_high_rad_s), "quality": result.quality,
+        "sense": "right" if result.direction == truth["direction"] else result.direction,
+        "note": result.rate_from + ("; shake found" if result.shake is not None else ""),
+    }
+
+
+#: The scored columns' header, after each benchmark's own leading columns.
+SCORE_HEADER = f"{'error':>8} {'95% interval':>18} {'covers':>6} {'quality':>7} {'sense':>7}  from"
+
+
+def score_columns(row: dict[str, object]) -> str:
+    """A scored row's columns under :data:`SCORE_HEADER`."""
+    interval = f"[{row['low_pct']:+.2f}, {row['high_pct']:+.2f}]"
+    return (f"{row['error_pct']:>+7.2f}% {interval:>18} {'yes' if row['covers'] else 'NO':>6} {row['quality']:>7} "
+            f"{row['sense']:>7}  {row['note']}")
+
+
+def print_scored(lead_header: str, leads: list[str], rows: list[dict[str, object]]) -> bool:
+    """Print the table (each row's own leading columns, then the scores) and the summary line;
+    True where the benchmark passes (see :func:`summary`)."""
+    header = f"{lead_header} {SCORE_HEADER}"
+    print(header)
+    print("-" * len(header))
+    for lead, row in zip(leads, rows, strict=True):
+        print(f"{lead} {score_columns(row)}")
+    line, passed = summary(rows)
+    print(f"\n{line}")
+    return passed
+
+
+def summary(rows: list[dict[str, object]]) -> tuple[str, bool]:
+    """The summary line (clips, covering, good, unmarked misses, wrong senses) and whether every
+    interval covers, no miss is unmarked and no sense is wrong."""
+    covered = sum(bool(row["covers"]) for row in rows)
+    unmarked = sum(abs(float(row["error_pct"])) > 100 * UNMARKED_LIMIT and row["quality"] == "good" for row in rows)
+    wrong = sum(row["sense"] in ("cw", "ccw") for row in rows)
+    good = [row for row in rows if row["quality"] == "good"]
+    line = (f"clips {len(rows)}; intervals covering the truth {covered} ({100 * covered / max(len(rows), 1):.0f}%); "
+            f"good {len(good)} (covering {sum(bool(r['covers']) for r in good)}); off by more than "
+            f"{100 * UNMARKED_LIMIT:.0f}% and not marked weak {unmarked}; sense wrong {wrong}")
+    return line, unmarked == 0 and wrong == 0 and covered == len(rows)
