@@ -47,7 +47,7 @@ from rotrate_cli.rates import Camera
 from rotrate_cli.reasons import name_rejections, track_places
 from rotrate_cli.segment import Body
 from rotrate_cli.series import rate_series
-from rotrate_cli.steady import Shake
+from rotrate_cli.steady import CameraPath, Shake
 from rotrate_cli.verdict import Verdict, judge, turns_between
 from rotrate_cli.view import View, keep_for_view
 
@@ -89,7 +89,8 @@ class Analysis:
         series: omega(t) over a sliding window (see :mod:`rotrate_cli.series`), or None.
         bodies: with ``segment``, every rigid body measured, the headline one (most tracks)
             first; None otherwise.
-        tracks: with ``keep_tracks``, the positions ``frame, time_s, track, x_px, y_px``
+        tracks: with ``keep_tracks``, the positions ``frame, time_s, track, x_px, y_px`` on
+            the frames as they are (a shaken camera's too)
             (tracks numbered as the features); None otherwise.
         verdict: how the reported rate was judged from the tracks and the clip's repetition,
             and its quality (``good``/``weak``; see :mod:`rotrate_cli.verdict`).
@@ -206,7 +207,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         return _segmented(footage, config)
     period = _repetition(footage, config)
     footage.thumbnails.clear()
-    kept = _kept_tracks(tracks) if config.keep_tracks else None
+    kept = _kept_tracks(tracks, footage.camera) if config.keep_tracks else None
     view_tracks = keep_for_view(tracks)  # the view is read at the rate reported, once it is known
     places = track_places(tracks)  # where each track lies: to name why the rejected were
     try:
@@ -241,9 +242,11 @@ def _angle_guess(footage: Footage, config: AnalysisConfig) -> float:
     return footage.motion_angle_deg if math.isfinite(footage.motion_angle_deg) else 0.0
 
 
-def _kept_tracks(tracks: pd.DataFrame) -> pd.DataFrame:
-    """The positions for pictures of the measurement (an overlay), numbered as the features."""
-    return tracks[["frame", "time_s", "track", "x_px", "y_px"]].assign(track=tracks["track"] + 1)
+def _kept_tracks(tracks: pd.DataFrame, camera: CameraPath | None = None) -> pd.DataFrame:
+    """The positions for pictures of the measurement (an overlay), numbered as the features, where
+    the camera saw them (a shaken camera's own frames)."""
+    kept = tracks[["frame", "time_s", "track", "x_px", "y_px"]].assign(track=tracks["track"] + 1)
+    return kept if camera is None else camera.seen(kept)
 
 
 def _repetition(footage: Footage, config: AnalysisConfig) -> Period | None:

@@ -68,7 +68,7 @@ class Footage:
             (:data:`MIN_TRACKS_FOR_ANGLE`) tell.
         warnings: what the user should know from decoding and tracking.
         shake: the hand-held camera's shake taken out of the tracks (:mod:`rotrate_cli.steady`);
-            None where none showed.
+            None where none showed. ``camera``: its motion, to draw the tracks on its frames.
     """
 
     info: VideoInfo
@@ -79,6 +79,7 @@ class Footage:
     motion_angle_deg: float
     warnings: tuple[str, ...] = ()
     shake: Shake | None = None
+    camera: CameraPath | None = None
 
 
 def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None = None) -> Footage:
@@ -132,7 +133,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     # the decoder may have learnt something while it read (a stream OpenCV decodes black)
     warnings += [warning for warning in video.warnings if warning not in warnings]
     notes = list(run.notes) + warnings
-    shake = None if shaken is None else shaken[1]
+    shake, camera = (None, None) if shaken is None else (shaken[1], shaken[0])
     if shake is not None:
         notes.append(f"the camera shook ({shake.rms_px:.1f} px rms, at most {shake.largest_px:.1f} px): the tracks are "
                      f"measured as a still camera would see them, from {shake.background_tracks} still background "
@@ -142,7 +143,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         if short is not None:
             notes.append(short)
     return Footage(info, tracks, thumbnails, run.frames, run.last_time_s - run.first_time_s, float(angle),
-                   tuple(notes), shake)
+                   tuple(notes), shake, camera)
 
 
 def _check_against_frames(config: AnalysisConfig, info: VideoInfo) -> list[str]:

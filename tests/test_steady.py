@@ -61,6 +61,9 @@ def test_the_shake_is_found_from_the_still_background_and_taken_out() -> None:
     # every point where the camera, held where it stood at the first frame, would have seen it
     error = np.hypot(steadied["x_px"] - steady_truth["x_px"], steadied["y_px"] - steady_truth["y_px"])
     assert error.max() < 0.05
+    # and back on the shaken camera's own frames (where an overlay draws them)
+    seen = path.seen(steadied)
+    assert np.abs(seen[["x_px", "y_px"]].to_numpy() - tracks[["x_px", "y_px"]].to_numpy()).max() < 1e-3
 
 
 def test_no_shake_on_a_tripod_or_without_a_background() -> None:
