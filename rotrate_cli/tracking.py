@@ -51,6 +51,16 @@ BACKWARD_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)
 FLICKER_GAIN = 0.01
 LIGHT_FRAMES = 9
 
+#: The activity map compares a frame with the last one seeded from (``reseed_every`` before) and
+#: with the one ``activity_s`` before; where the first shows under this share of the pixels the
+#: second does, the turn is slow, and both count. Frames a few apart show 0.6-0.95 of it on the
+#: accuracy suite's renders and the real record (a body's pixels change at either lag), 0.1-0.5 on
+#: the real wheel (its holder sways), 0.03-0.09 on a box turning at 0.05 rad/s and none at 0.03.
+#: At most :data:`MAX_REFERENCES` earlier frames are kept (120 frames/s, seeding every 4th: 30 a
+#: second).
+SLOW_SHARE = 0.2
+MAX_REFERENCES = 64
+
 
 def steady_light(levels: deque[float], level: float) -> float:
     """The factor that brings a frame of mean brightness ``level`` to the median of the recent
@@ -112,8 +122,9 @@ class TrackerConfig:
             moved two of them by 2-17%).
         fb_max_error_px: the largest forward-backward round-trip error a point may have.
         reseed_every: seed new corners every this many frames.
-        motion_threshold: grey-level change (0-255) between frames ``reseed_every`` apart that
-            marks a pixel as moving.
+        motion_threshold: grey-level change (0-255) that marks a pixel as moving, between a
+            frame and the last one seeded from (``reseed_every`` before), and where the turn is
+            slow also the one ``activity_s`` before (:data:`SLOW_SHARE`).
         activity_s: a pixel counts as moving for this long after it last changed.
         max_static_fraction: a point whose window holds more than this fraction of static
             pixels is on the object's outline (or off the object) and is dropped.
@@ -334,8 +345,9 @@ class CornerTracker:
         self._static_mask = np.full_like(self._seed_mask, 255)
         self._store = _Tracks()
         self._prev: np.ndarray | None = None
-        self._reference: np.ndarray | None = None  # the frame last compared with (box-blurred), for the activity map
-        self._reference_time = 0.0
+        # the frames compared with (box-blurred) for the activity map, with their times and indices:
+        # the last one, and back to activity_s ago
+        self._references: deque[tuple[np.ndarray, float, int]] = deque(maxlen=MAX_REFERENCES)
         self._last_change = np.full(self._seed_mask.shape, -np.inf, np.float32)  # when each pixel last changed, s
         self._points = np.empty((0, 2), np.float32)
         self._ids = np.empty(0, np.int32)
@@ -348,7 +360,6 @@ class CornerTracker:
         #: still against it are the background, and pixels change only where the picture does
         self.camera: CameraPath | None = None
         self._lost: deque[float] = deque(maxlen=JOLT_FRAMES)  # fraction of followed points lost, recent frames
-        self._reference_frame = 0
         self._frame_index = 0
         self._levels: deque[float] = deque(maxlen=LIGHT_FRAMES)  # recent frames' mean brightness
 
@@ -432,18 +443,35 @@ class CornerTracker:
         flicker in and out.
         """
         smoothed = cv2.blur(grey, (3, 3))
-        if self._reference is None:
-            self._reference, self._reference_time, self._reference_frame = smoothed, time_s, frame_index
+        references = self._references
+        if references:
+            threshold = self.config.motion_threshold
+            changed = self._changed(smoothed, references[-1], frame_index) > threshold
+            if len(references) > 1:
+                # a slow turn (a motor show's turntable at 0.02-0.05 rad/s) changes its pixels too
+                # little between frames a few apart: where they show under SLOW_SHARE of the change
+                # since activity_s ago, that change counts too (a box at 0.03 rad/s was "no point
+                # could be tracked"; at 0.05 it kept 7 tracks, and its 95% interval missed)
+                since = self._changed(smoothed, references[0], frame_index) > threshold
+                share = int(np.count_nonzero(changed)) / max(1, int(np.count_nonzero(since)))
+                if share < SLOW_SHARE:
+                    changed |= since
+            self._last_change[changed] = time_s
+        references.append((smoothed, time_s, frame_index))
+        while len(references) > 2 and time_s - references[1][1] >= self.config.activity_s:
+            references.popleft()
+        if len(references) == 1:
             return None
-        reference = self._reference
-        if self.camera is not None:  # the reference as the camera stands now: the background still
-            matrix = self.camera.between(self._reference_frame, frame_index, self.scale)
-            reference = cv2.warpAffine(reference, matrix, (reference.shape[1], reference.shape[0]),
-                                       flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        change = cv2.absdiff(smoothed, reference)
-        self._reference, self._reference_time, self._reference_frame = smoothed, time_s, frame_index
-        self._last_change[change > self.config.motion_threshold] = time_s
         return ((time_s - self._last_change) <= self.config.activity_s).astype(np.uint8) * 255
+
+    def _changed(self, smoothed: np.ndarray, reference: tuple[np.ndarray, float, int], frame_index: int) -> np.ndarray:
+        """How much each pixel of ``smoothed`` differs from an earlier frame (grey levels)."""
+        image, _, reference_frame = reference
+        if self.camera is not None:  # the reference as the camera stands now: the background still
+            matrix = self.camera.between(reference_frame, frame_index, self.scale)
+            image = cv2.warpAffine(image, matrix, (image.shape[1], image.shape[0]), flags=cv2.INTER_LINEAR,
+                                   borderMode=cv2.BORDER_REPLICATE)
+        return cv2.absdiff(smoothed, image)
 
     def _drop_outline(self, moving: np.ndarray) -> None:
         """Drop points whose tracking window reaches into static pixels.
