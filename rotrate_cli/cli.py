@@ -34,7 +34,7 @@ if TYPE_CHECKING:
 
 app = typer.Typer(
     name="rotrate",
-    help="Measure how fast a rigid object spins (rad/s) from a video with a static camera.",
+    help="Measure how fast a rigid object spins (rad/s) from a video, on a tripod or held by hand.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -55,7 +55,7 @@ def _options(
     version: Annotated[bool, typer.Option("--version", metavar="", help="Show the version and exit.", is_eager=True,
                                           callback=_print_version)] = False,
 ) -> None:
-    """Measure how fast a rigid object spins (rad/s) from a video with a static camera."""
+    """Measure how fast a rigid object spins (rad/s) from a video, on a tripod or held by hand."""
 
 FormatOption = Annotated[str | None, typer.Option("--format", "-f", metavar="FORMAT",
                                                   help="table, csv (Table I layout) or json; default: from "
