@@ -233,6 +233,16 @@ def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size
     return replace(geometry, fixation_px=(float(fixation[0]), float(fixation[1]))), result
 
 
+def _within_reach(point_px: tuple[float, float], given_px: tuple[float, float], size_px: tuple[int, int]) -> bool:
+    """Whether ``point_px`` lies no further from the frame's centre than the given fixation does,
+    plus the frame's diagonal (an axis outside the picture can still be told: a record player's
+    spindle beside it)."""
+    width, height = size_px
+    centre = (width / 2.0, height / 2.0)
+    reach = math.hypot(width, height) + math.hypot(given_px[0] - centre[0], given_px[1] - centre[1])
+    return math.hypot(point_px[0] - centre[0], point_px[1] - centre[1]) <= reach
+
+
 def fixation_doubt(result: RateResult, geometry: Geometry, config: AnalysisConfig,
                    size_px: tuple[int, int]) -> tuple[str, Combined] | None:
     """A given fixation checked against the axis the inlier tracks turn about (the shared-axis
@@ -260,6 +270,10 @@ def fixation_doubt(result: RateResult, geometry: Geometry, config: AnalysisConfi
             break
         shift += step
         found = (fixation[0] + shift * ux, fixation[1] + shift * uy)
+        if not _within_reach(found, fixation, size_px):
+            # the tracks show no axis near the picture (a record's first 1.5 s, its tracks on the
+            # still reflections: the walk named a point 544,179 px away)
+            return None
         camera = camera_at(geometry.lens, size_px, found, geometry.axis_angle_deg)
         moved = offsets.assign(offset_px=offsets["offset_px"].to_numpy() - shift)  # the inliers: memory
         again = rates_from_offsets(moved, config.method, config.rejection, camera)
