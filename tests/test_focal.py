@@ -160,3 +160,18 @@ def test_a_lens_the_tracks_cannot_tell_widens_the_interval_and_says_so() -> None
     # a wide lens reads a side view's rate lower: the interval reaches further down
     assert unknown.omega_low_rad_s < 0.95 * chosen.omega_low_rad_s
     assert unknown.omega_high_rad_s >= chosen.omega_high_rad_s
+
+
+def test_a_fit_stopped_at_the_orthographic_bound_is_started_again_from_a_wide_lens(tmp_path: Path) -> None:
+    """A cylinder filling a portrait frame through a 40-degree lens, seen from 15 degrees above:
+    the fit from the orthographic start stopped at the bound, and the clip read +49% within
+    [+45%, +54%], called good. Started again from 45 degrees the fit finds 41 degrees."""
+    from rotrate_cli.synth import SceneConfig, write_clip
+
+    scene = SceneConfig(shape="cylinder", omega_rad_s=-0.7, duration_s=5.0, width_px=360, height_px=640,
+                        projection="perspective", fov_deg=40.0, elevation_deg=15.0, noise_sigma=2.0, supersample=1)
+    path = tmp_path / "portrait.mp4"
+    write_clip(scene, path)
+    analysis = analyze(path, AnalysisConfig(fixation_px=None))
+    assert analysis.omega_low_rad_s <= 0.7 <= analysis.omega_high_rad_s
+    assert abs(analysis.omega_rad_s) == pytest.approx(0.7, rel=0.05)
