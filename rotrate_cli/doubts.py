@@ -59,10 +59,7 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
         # its truth 0.6; about the axis found 7 px off its own, 0.58, and now [0.088, 0.587])
         message, about_found = doubt
         doubts += (message,)
-        combined = result.combined
-        result = replace(result, combined=Combined(
-            combined.omega_rad_s, float(np.nanmin([combined.omega_low_rad_s, about_found.omega_low_rad_s])),
-            float(np.nanmax([combined.omega_high_rad_s, about_found.omega_high_rad_s])), combined.tracks_used))
+        result = _spanning(result, about_found)
     change = rate_change(result, config, camera)
     if change is not None:
         doubts += (change,)
@@ -101,11 +98,15 @@ def with_sides_span(result: RateResult) -> RateResult:
     lies between them. The EPFL car of that line (seq10, its first 70 photographs, truth +0%):
     +5.6% within [+1.9%, +9.3%] before; both sides' rates bracket the truth."""
     sides = _sides_apart(result)
-    if sides is None:
-        return result
+    return result if sides is None else _spanning(result, *sides)
+
+
+def _spanning(result: RateResult, *others: Combined) -> RateResult:
+    """The result with its interval widened to hold ``others``' intervals too (bounds that are
+    NaN, of a rate that could not be measured, are passed over); its rate as it was."""
     combined = result.combined
-    low = min(combined.omega_low_rad_s, *(side.omega_low_rad_s for side in sides))
-    high = max(combined.omega_high_rad_s, *(side.omega_high_rad_s for side in sides))
+    low = float(np.nanmin([combined.omega_low_rad_s, *(other.omega_low_rad_s for other in others)]))
+    high = float(np.nanmax([combined.omega_high_rad_s, *(other.omega_high_rad_s for other in others)]))
     return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
 
 
