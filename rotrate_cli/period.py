@@ -29,7 +29,6 @@ found is then a fraction of the turn, and the tracks' own rate tells which fract
 from __future__ import annotations
 
 import math
-from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
 
@@ -37,7 +36,7 @@ import cv2
 import numpy as np
 
 from rotrate_cli.decode import Frame
-from rotrate_cli.tracking import LIGHT_FRAMES, steady_light
+from rotrate_cli.light import SteadyLight
 
 #: The thumbnails' longer side, pixels: the whole picture's repetition needs little detail, and
 #: the pairwise differences cost the square of the frame count times this squared.
@@ -157,10 +156,10 @@ class Thumbnails:
 
     def __init__(self, max_frames: int = MAX_FRAMES, steady_light: bool = False) -> None:
         self._max = max_frames
-        self.steady_light = steady_light  # flickering light taken out (videos; see _steady_light)
+        self.steady_light = steady_light  # flickering light taken out (videos; see rotrate_cli.light)
         self._images: list[np.ndarray] = []
         self._times: list[float] = []
-        self._levels: deque[float] = deque(maxlen=LIGHT_FRAMES)  # recent thumbnails' mean brightness
+        self._light = SteadyLight()
 
     def tap(self, frames: Iterator[Frame]) -> Iterator[Frame]:
         """Yield ``frames`` unchanged, keeping a thumbnail of each (grey or BGR images)."""
@@ -180,16 +179,9 @@ class Thumbnails:
         small = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA) if scale < 1 else image
         small = np.asarray(small, dtype=np.uint8)
         if self.steady_light:
-            small = self._steady_light(small)
+            small = self._light.steadied(small)
         self._images.append(small.ravel())
         self._times.append(float(time_s))
-
-    def _steady_light(self, small: np.ndarray) -> np.ndarray:
-        """A thumbnail at the brightness usual in the last frames
-        (:func:`rotrate_cli.tracking.steady_light`): a light flickering with the mains (15% at 10
-        Hz, seen at 30 frames/s) repeats every 3 frames, and was taken for the turn."""
-        scale = steady_light(self._levels, float(small.mean()))
-        return small if scale == 1.0 else cv2.convertScaleAbs(small, alpha=scale)
 
     def black_fraction(self) -> float:
         """The fraction of the frames seen whose thumbnail is all black (0 when none were seen)."""
@@ -210,7 +202,7 @@ class Thumbnails:
     def clear(self) -> None:
         self._images.clear()
         self._times.clear()
-        self._levels.clear()
+        self._light.clear()
 
     @property
     def times_s(self) -> np.ndarray:

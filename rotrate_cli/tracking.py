@@ -23,6 +23,7 @@ import numpy as np
 
 from rotrate_cli.decode import Frame
 from rotrate_cli.lazy import pandas as pd
+from rotrate_cli.light import SteadyLight
 from rotrate_cli.steady import CameraPath
 
 KNOWN_LEVELS = 0
@@ -42,14 +43,6 @@ FORWARD_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.03)
 #: The backward pass only checks the round trip against ``fb_max_error_px`` (0.3 px): a step of
 #: 0.03 px is ten times finer than that, and stops 15% sooner than the forward rule.
 BACKWARD_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)
-#: A frame whose mean brightness differs by more than this fraction from the median of the last
-#: :data:`LIGHT_FRAMES` frames' is brought to it: lights that flicker with the mains (50 Hz seen at
-#: 30 frames/s as 10 Hz). A 5% flicker marked the whole still background as moving, its points
-#: stuck at the outline, and a rendered box read 0.065 rad/s for 0.5; at 30% Lucas-Kanade lost
-#: every point within a few frames (12,700 tracks). A turning body changes the mean slowly, which
-#: the median follows (against the first frame's, the accuracy suite's clips drift past 1%).
-FLICKER_GAIN = 0.01
-LIGHT_FRAMES = 9
 
 #: The activity map compares a frame with the last one seeded from (``reseed_every`` before) and
 #: with the one ``activity_s`` before; where the first shows under this share of the pixels the
@@ -62,14 +55,6 @@ SLOW_SHARE = 0.2
 MAX_REFERENCES = 64
 
 
-def steady_light(levels: deque[float], level: float) -> float:
-    """The factor that brings a frame of mean brightness ``level`` to the median of the recent
-    ``levels`` where it differs by more than :data:`FLICKER_GAIN` (else 1); ``level`` joins them."""
-    usual = statistics.median(levels) if levels else level  # a few values: faster than numpy's
-    levels.append(level)
-    if level > 0 and abs(usual / level - 1.0) > FLICKER_GAIN:
-        return usual / level
-    return 1.0
 #: The blur applied to video frames before tracking when the configuration leaves it open.
 VIDEO_BLUR_SIGMA_PX = 1.0
 TRACK_COLUMNS = ("frame", "time_s", "track", "x_px", "y_px")
@@ -110,8 +95,8 @@ class TrackerConfig:
             from +0.15% to +1.7% (within its own interval, but the wrong way).
         pyramid_levels: pyramid levels above the base image (each halves the size).
         steady_light: a frame brighter or darker than the last few by more than
-            :data:`FLICKER_GAIN` is brought to their brightness (lights flickering with the
-            mains); None chooses by source: videos, not image sequences (stills exposed one by
+            :data:`rotrate_cli.light.FLICKER_GAIN` is brought to their brightness (lights
+            flickering with the mains); None chooses by source: videos, not image sequences (stills exposed one by
             one differ for their own reasons: on the EPFL cars it moved the rates by up to 0.3%
             and their parts by up to 9%).
         retry_lost: a point lost from its predicted step searches the full pyramid once more;
@@ -361,13 +346,13 @@ class CornerTracker:
         self.camera: CameraPath | None = None
         self._lost: deque[float] = deque(maxlen=JOLT_FRAMES)  # fraction of followed points lost, recent frames
         self._frame_index = 0
-        self._levels: deque[float] = deque(maxlen=LIGHT_FRAMES)  # recent frames' mean brightness
+        self._light = SteadyLight()  # flickering light taken out (videos)
 
     def update(self, frame_index: int, time_s: float, grey: np.ndarray) -> None:
         """Track the live points into this frame, drop the bad ones, and seed new ones."""
         self._frame_index = frame_index
         if self.config.steady_light:
-            grey = self._steady_light(grey)
+            grey = self._light.steadied(grey)
         if self._prev is not None and len(self._points):
             self._advance(grey)
             self._drop_static(time_s, frame_index)
@@ -379,11 +364,6 @@ class CornerTracker:
         self._store.add(frame_index, time_s, self._ids, self._points)
         self._prev = grey
         self._count += 1
-
-    def _steady_light(self, grey: np.ndarray) -> np.ndarray:
-        """``grey`` at the brightness usual in the last frames (see :func:`steady_light`)."""
-        scale = steady_light(self._levels, float(cv2.mean(grey)[0]))
-        return grey if scale == 1.0 else cv2.convertScaleAbs(grey, alpha=scale)
 
     def _move(self, grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Where each live point went in ``grey`` (n x 2, tracking-image pixels) and whether it was
