@@ -82,7 +82,8 @@ class Analysis:
         axis_angle_deg: the axis's angle in the image (0 vertical, positive: top end right).
         axis_found: True when the fixation point was found from the tracks.
         axis_angle_found: True when the angle was found from the tracks.
-        axis_angle_from: how it was found (``motion`` or ``paths``; see ``AnalysisConfig.angle_from``).
+        axis_angle_from: how it was found (``motion``, ``paths`` or ``lens``, with the lens found
+            from the tracks; see ``AnalysisConfig.angle_from``).
         elevation_deg: the camera's elevation found from the paths (``paths``) or with the
             focal length (``find_focal``); NaN otherwise.
         focal: with ``find_focal``, what the tracks said about the camera; None otherwise.
@@ -290,8 +291,9 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         tracks_total=int(len(result.features)), tracks_used=combined.tracks_used, features=result.features,
         offsets=result.offsets, rejection=config.rejection, warnings=warnings,
         axis_angle_deg=float(geometry.axis_angle_deg), axis_found=geometry.fixation_found,
-        axis_angle_found=geometry.angle_from in ("motion", "paths"),
-        axis_angle_from=geometry.angle_from if geometry.angle_from in ("motion", "paths") else config.angle_from,
+        axis_angle_found=geometry.angle_from in ("motion", "paths", "lens"),
+        axis_angle_from=(geometry.angle_from if geometry.angle_from in ("motion", "paths", "lens")
+                         else config.angle_from),
         elevation_deg=geometry.elevation_deg, verdict=verdict, period=period, clock=footage.info.clock,
         camera_from=geometry.lens.source, view=geometry.view, shake=footage.shake, **measured_by,  # type: ignore[arg-type]
     )

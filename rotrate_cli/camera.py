@@ -83,11 +83,13 @@ def camera_at(lens: Lens, size_px: tuple[int, int], fixation_px: tuple[float, fl
     ux, uy = axes.unit_offset(angle_deg)
     axis_px = (fixation_px[0] - (width_px / 2.0 - 0.5)) * ux + (fixation_px[1] - (height_px / 2.0 - 0.5)) * uy
     elevation = lens.elevation_deg if math.isfinite(lens.elevation_deg) else 0.0
-    return rates.Camera(lens.focal_px, axis_px / lens.focal_px, math.cos(math.radians(elevation)))
+    told = lens.estimate.sense if lens.source == "found" and lens.estimate is not None else math.nan
+    return rates.Camera(lens.focal_px, axis_px / lens.focal_px, math.cos(math.radians(elevation)),
+                        int(told) if math.isfinite(told) else 0)
 
 
 def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg: float, lens: Lens,
-              size_px: tuple[int, int]) -> Lens:
+              size_px: tuple[int, int], elevation_guess_deg: float = math.nan) -> Lens:
     """The focal length (and elevation, unless given) found from the tracks, at a first rate from
     their recurrence; orthographic when no perspective shows, and ``unsettled`` (``estimate``
     None) when too few tracks turn far enough to tell, or the clip's halves turn at different
@@ -98,7 +100,7 @@ def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg:
     if not (math.isfinite(omega) and omega > 0):
         return replace(lens, unsettled=True)
     changing = _changing(tracks, offsets)
-    elevation = lens.elevation_deg if math.isfinite(lens.elevation_deg) else 0.0
+    elevation = next((value for value in (lens.elevation_deg, elevation_guess_deg) if math.isfinite(value)), 0.0)
     estimate = estimate_focal(tracks, fixation_px, angle_deg, omega, size_px, elevation)
     if estimate is None or (changing and not math.isfinite(estimate.focal_px)):
         return replace(lens, unsettled=True)

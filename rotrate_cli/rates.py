@@ -65,11 +65,15 @@ class Camera:
         depth_scale: the cosine of the camera's elevation (1 for a level camera). Seen from
             above, a point's depth changes by its radial position times this cosine, while its
             height only changes its distance by a constant per track (taken up by its amplitude).
+        sense: +1 anticlockwise, -1 clockwise where the view told it (the lens's fit, seen
+            from above: :attr:`rotrate_cli.focal.FocalEstimate.sense`); 0 where the tracks'
+            fits are to tell it.
     """
 
     focal_px: float
     axis_n: float
     depth_scale: float = 1.0
+    sense: int = 0
 
 
 
@@ -425,10 +429,15 @@ def fit_tracks(samples: pd.DataFrame, min_samples: int = 4, camera: Camera | Non
 
     With a pinhole ``camera`` all tracks are fitted in both senses of rotation and the sense
     that explains the body as a whole is kept (a rigid body has one); each fit's ``sense`` says
-    it, or is NaN when the two senses explain the tracks about equally well.
+    it, or is NaN when the two senses explain the tracks about equally well. Where the camera
+    says the sense (``Camera.sense``), the tracks are fitted in that sense only.
     """
     if camera is None:
         return _fit_all(samples, min_samples, None, 0)
+    if camera.sense:  # the view told it: seen from above, by the way the paths go round
+        told = _fit_all(samples, min_samples, camera, camera.sense)
+        return {k: replace(fit, sense=float(camera.sense) if math.isfinite(fit.omega_rad_s) else math.nan)
+                for k, fit in told.items()}
     fits = {sense: _fit_all(samples, min_samples, camera, sense) for sense in (1, -1)}
     evidence = _sense_evidence(fits[1], fits[-1], samples.groupby("track", sort=False).size())
     chosen = 1 if evidence >= 0 else -1

@@ -192,6 +192,10 @@ def to_json(analysis: Analysis) -> str:
     return json.dumps(to_dict(analysis), indent=2, allow_nan=False) + "\n"
 
 
+#: How a found axis angle is named in the table (``Analysis.axis_angle_from``).
+_ANGLE_FOUND = {"motion": "from the motion", "paths": "from the paths", "lens": "with the lens, from the tracks"}
+
+
 def render_table(analysis: Analysis, console: Console) -> None:
     """A summary and per-feature rows, for the terminal."""
     interval = (
@@ -213,7 +217,8 @@ def render_table(analysis: Analysis, console: Console) -> None:
     if not math.isnan(fy):
         summary.add_row("axis", f"{analysis.axis_angle_deg:+.2f} deg from vertical (top end "
                         f"{'right' if analysis.axis_angle_deg >= 0 else 'left'})"
-                        + (f"  (found from the {analysis.axis_angle_from})" if analysis.axis_angle_found else "")
+                        + (f"  (found {_ANGLE_FOUND.get(analysis.axis_angle_from, 'from the tracks')})"
+                           if analysis.axis_angle_found else "")
                         + ("" if math.isnan(analysis.elevation_deg) or _elevation_in_view(analysis)
                            else _elevation_text(analysis)))
     summary.add_row("view", _view_text(analysis))
