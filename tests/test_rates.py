@@ -111,9 +111,9 @@ def test_pinhole_fit_of_a_camera_looking_down() -> None:
     assert track_misfits(samples, 0.5, rates.Camera(focal_px, 0.0))[0] > 1e-3
 
 
-def test_body_wide_sense_from_many_weak_tracks(rng: np.random.Generator) -> None:
-    focal_px = 1500.0
-    camera = rates.Camera(focal_px, 0.0)
+def _weak_clockwise_tracks(rng: np.random.Generator, focal_px: float) -> pd.DataFrame:
+    """12 short tracks of points near the axis turning clockwise at 0.7 rad/s through a pinhole:
+    each says little of the sense."""
     rows = []
     for track in range(12):
         time_s = np.arange(45) / 30.0 + rng.uniform(0, 2)
@@ -122,7 +122,13 @@ def test_body_wide_sense_from_many_weak_tracks(rng: np.random.Generator) -> None
         x_n = radius * np.sin(angle) / (1 - radius * np.cos(angle))
         rows.append(pd.DataFrame({"track": track, "time_s": time_s,
                                   "offset_px": x_n * focal_px + rng.normal(0, 0.05, 45)}))
-    fits = rates.fit_tracks(pd.concat(rows, ignore_index=True), camera=camera)
+    return pd.concat(rows, ignore_index=True)
+
+
+def test_body_wide_sense_from_many_weak_tracks(rng: np.random.Generator) -> None:
+    focal_px = 1500.0
+    camera = rates.Camera(focal_px, 0.0)
+    fits = rates.fit_tracks(_weak_clockwise_tracks(rng, focal_px), camera=camera)
     assert all(fit.sense == -1 for fit in fits.values())
     assert np.median([fit.omega_rad_s for fit in fits.values()]) == pytest.approx(0.7, rel=0.01)
 
@@ -132,15 +138,7 @@ def test_a_sense_the_view_told_is_the_one_fitted(rng: np.random.Generator) -> No
     the pinhole (a render turned 0.4 rad, 5 grey levels of noise, read cw, +11%, for ccw); the
     lens's fit tells the sense from the way the paths go round, and the tracks are fitted in it."""
     focal_px = 1500.0
-    rows = []
-    for track in range(12):
-        time_s = np.arange(45) / 30.0 + rng.uniform(0, 2)
-        angle = -0.7 * time_s + rng.uniform(-1, 1)  # clockwise
-        radius = rng.uniform(0.04, 0.09)
-        x_n = radius * np.sin(angle) / (1 - radius * np.cos(angle))
-        rows.append(pd.DataFrame({"track": track, "time_s": time_s,
-                                  "offset_px": x_n * focal_px + rng.normal(0, 0.05, 45)}))
-    samples = pd.concat(rows, ignore_index=True)
+    samples = _weak_clockwise_tracks(rng, focal_px)
     told = rates.fit_tracks(samples, camera=rates.Camera(focal_px, 0.0, sense=-1))
     assert all(fit.sense == -1 for fit in told.values())
     assert np.median([fit.omega_rad_s for fit in told.values()]) == pytest.approx(0.7, rel=0.01)
