@@ -46,7 +46,8 @@ MIN_TURN_RAD = 0.3
 #: Samples whose offset across the line of sight exceeds this fraction of their radius (turned
 #: more than 55 degrees from facing the camera) are left out after the first fit.
 FACE_ON_LATERAL = 0.82
-#: Unknowns shared by all tracks: inverse focal length, elevation, rate, and the axis's angle.
+#: Unknowns shared by all tracks: inverse focal length, elevation, rate, the axis's angle, and the
+#: axis point's shift across the axis.
 SHARED = 5
 #: Focal lengths longer than this many image widths (a field of view under 8.2 degrees) are
 #: reported as orthographic: the trackers' own small biases look like that much perspective (an

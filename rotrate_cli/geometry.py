@@ -162,19 +162,15 @@ def locate(tracks: pd.DataFrame, motion_angle_deg: float, config: AnalysisConfig
         NoResultError: the axis cannot be found from the tracks.
     """
     angle, angle_from, elevation, notes = axis_angle(tracks, motion_angle_deg, config)
-    lens = lens_from(config, info)
+    lens = lens_from(config, info)  # its elevation given, or NaN
     paths_elevation = elevation if angle_from == "paths" else math.nan
-    if not math.isfinite(lens.elevation_deg):
-        lens = replace(lens, elevation_deg=paths_elevation)
     fixation = _first_fixation(tracks, angle, config)
     size_px = (info.width_px, info.height_px)
     if (seek_lens and lens.source == "orthographic" and config.find_focal and config.method == "fit"
             and not config.points_px):
         # the paths' elevation reads their ellipses as seen from far away: it only starts the lens's
         # fit, which finds the elevation with the perspective
-        given = config.elevation_deg is not None
-        lens = find_lens(tracks, fixation, angle, lens if given else replace(lens, elevation_deg=math.nan), size_px,
-                         paths_elevation)
+        lens = find_lens(tracks, fixation, angle, lens, size_px, paths_elevation)
         if lens.estimate is not None and math.isfinite(lens.estimate.focal_px):
             elevation = lens.estimate.elevation_deg
             if config.axis_angle_deg is None and config.angle_from == "auto":
@@ -182,8 +178,8 @@ def locate(tracks: pd.DataFrame, motion_angle_deg: float, config: AnalysisConfig
                 # above through 35-65 degree lenses, renders' paths leaned 7 and 5 degrees, the
                 # lens's fit 0.2 and 0.0)
                 angle, angle_from = lens.estimate.axis_angle_deg, "lens"
-        elif not math.isfinite(lens.elevation_deg):
-            lens = replace(lens, elevation_deg=paths_elevation)
+    if not math.isfinite(lens.elevation_deg):
+        lens = replace(lens, elevation_deg=paths_elevation)
     geometry = Geometry(angle, angle_from, fixation, config.fixation_px is None, lens, elevation, notes=notes)
     return geometry, prepare_body(tracks, angle, fixation, config)
 
