@@ -92,7 +92,7 @@ def parts() -> list[Case]:
                               math.inf, truth["direction"], end_s=(photographs - 0.5) * step_s))
     videos = DATA / "real_videos"
     for name, spans in (("record_oblique_closeup", ((0.0, 1.5), (0.0, 4.0), (10.0, 14.0))),
-                        ("bicycle_wheel_frontal", ((0.2, 2.5), (0.2, 5.0), (3.0, 13.0)))):
+                        ("bicycle_wheel_frontal", ((0.0, 2.5), (0.0, 5.0), (3.0, 13.0)))):
         truth_file = videos / f"{name}.truth.json"
         if truth_file.exists():
             truth = json.loads(truth_file.read_text())

@@ -27,6 +27,7 @@ from rotrate_cli.fits import no_result_message
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.period import Thumbnails
+from rotrate_cli.shots import longest_shot
 from rotrate_cli.steady import CameraPath, Shake, find_shake
 from rotrate_cli.tracking import (
     VIDEO_BLUR_SIGMA_PX,
@@ -108,6 +109,14 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         thumbnails.clear()
         run = _track(video, config, tracker, progress, thumbnails)
     _check_tracked(run, thumbnails, source)
+    shot = None if config.points_px else longest_shot(thumbnails.times_s, thumbnails.images)
+    if shot is not None:
+        # the clip cuts: tracks do not cross a cut, and the repetition is another scene's too
+        last = shot.last == len(thumbnails.times_s) - 1  # to the clip's end (thumbnails stop at a long clip's)
+        config = replace(config, start_s=shot.start_s, end_s=config.end_s if last else shot.end_s)
+        thumbnails.clear()
+        run = _track(video, config, tracker, progress, thumbnails)
+        _check_tracked(run, thumbnails, source)
     tracks = by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
     shaken = None if config.points_px else find_shake(tracks, run.frames, 1.0 / tracking_scale(info.width_px, tracker))
@@ -132,7 +141,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         angle = angle if math.isfinite(angle) else 0.0
     # the decoder may have learnt something while it read (a stream OpenCV decodes black)
     warnings += [warning for warning in video.warnings if warning not in warnings]
-    notes = list(run.notes) + warnings
+    notes = list(run.notes) + warnings + ([] if shot is None else [shot.note])
     shake, camera = (None, None) if shaken is None else (shaken[1], shaken[0])
     if shake is not None:
         notes.append(f"the camera shook ({shake.rms_px:.1f} px rms, at most {shake.largest_px:.1f} px): the tracks are "

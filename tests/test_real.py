@@ -73,6 +73,19 @@ def test_bicycle_wheel_seen_face_on() -> None:
     assert analysis.view is None
 
 
+def test_the_wheel_after_its_calibration_still() -> None:
+    """The clip opens on a still calibration frame (a ruler held across the wheel) and cuts to
+    the turning: the first 5 s read 0.038 rad/s, weak, with an interval that missed 2.27."""
+    clip = VIDEOS / "bicycle_wheel_frontal.mp4"
+    need(clip, "the bicycle wheel video")
+    truth = json.loads(clip.with_suffix(".truth.json").read_text())
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None, end_s=5.0))
+    assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.02)
+    assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
+    assert analysis.frames == 150
+    assert any("cuts once" in warning for warning in analysis.warnings)
+
+
 @pytest.mark.parametrize("fixation", [None, "truth"])
 def test_record_seen_obliquely(fixation: str | None) -> None:
     """The first 12 s (7 turns) of the record: grooves, glints and a label 8.5 degrees a frame."""
