@@ -226,7 +226,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
                                                       geometry.axis_angle_deg, result.combined.omega_rad_s,
                                                       result.offsets))
     checked = check_rate(result, geometry, config, size_px, view_tracks, repeating=period is not None,
-                         clock_resolution_s=footage.info.clock_resolution_s)
+                         clock_resolution_s=footage.info.clock_resolution_s, fps=footage.info.fps)
     if checked.result.combined.tracks_used == 0 and period is not None:
         return _repetition_only(footage, period, config, kept, view_tracks, checked.result, geometry)
     series = None

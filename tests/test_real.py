@@ -86,6 +86,16 @@ def test_the_wheel_after_its_calibration_still() -> None:
     assert any("cuts once" in warning for warning in analysis.warnings)
 
 
+def test_the_wheel_under_a_turn_is_weak_and_its_interval_holds_the_truth() -> None:
+    """Its first 2.5 s, under a turn: one track of 24 is kept, on the hands that hold the axle."""
+    clip = VIDEOS / "bicycle_wheel_frontal.mp4"
+    need(clip, "the bicycle wheel video")
+    truth = json.loads(clip.with_suffix(".truth.json").read_text())
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None, end_s=2.5))
+    assert analysis.quality == "weak"
+    assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
+
+
 @pytest.mark.parametrize("fixation", [None, "truth"])
 def test_record_seen_obliquely(fixation: str | None) -> None:
     """The first 12 s (7 turns) of the record: grooves, glints and a label 8.5 degrees a frame."""
