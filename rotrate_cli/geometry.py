@@ -315,6 +315,11 @@ def settle_view(geometry: Geometry, view_tracks: pd.DataFrame, omega_rad_s: floa
     view = view_from_paths(view_tracks, omega_rad_s)
     if view is None:
         return geometry
+    estimate = geometry.lens.estimate
+    if estimate is not None and math.isfinite(estimate.focal_px) and math.isfinite(geometry.elevation_deg):
+        # the paths read their ellipses as seen from far away; through the lens found, its fit's
+        # elevation is the view's (from 60 degrees above through a 65-degree lens: paths 50, lens 59)
+        view = replace(view, elevation_deg=abs(geometry.elevation_deg))
     changes_: dict[str, object] = {"view": view}
     if math.isnan(geometry.elevation_deg):
         changes_["elevation_deg"] = view.elevation_deg

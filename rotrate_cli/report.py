@@ -45,8 +45,11 @@ def _view_text(analysis: Analysis) -> str:
     view = analysis.view
     if view is None:
         return "unknown: too few tracks follow a turning path at the reported rate"
+    lens = " (its elevation with the lens found)" if analysis.focal is not None and math.isfinite(
+        analysis.focal.focal_px) else ""
     return (f"{view.name}: the axis {view.elevation_deg:.0f} deg out of the image plane (0 side, 90 frontal); "
-            f"turning centre {view.centre_px[0]:.0f}, {view.centre_px[1]:.0f} px, from {view.tracks} tracks' paths")
+            f"turning centre {view.centre_px[0]:.0f}, {view.centre_px[1]:.0f} px, from {view.tracks} tracks' "
+            f"paths{lens}")
 
 
 def _rate_from_text(analysis: Analysis) -> str:

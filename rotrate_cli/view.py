@@ -62,7 +62,8 @@ class View:
     """The view found from the tracks' paths (see the module's notes).
 
     Attributes:
-        elevation_deg: the axis's elevation out of the image plane: 0 side, 90 frontal.
+        elevation_deg: the axis's elevation out of the image plane: 0 side, 90 frontal (through a
+            lens found from the tracks, the lens fit's: see :func:`rotrate_cli.geometry.settle_view`).
         centre_px: the turning centre in the image (the median of the paths' centres), (x, y).
         centre_spread_px: the paths' centres' median distance from it: how well it is set.
         tracks: the tracks that spoke.

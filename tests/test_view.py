@@ -87,3 +87,20 @@ def test_keep_for_view_keeps_the_longest_tracks_thinned() -> None:
     assert 999 not in set(kept["track"])
     assert kept.groupby("track").size().max() <= 48
     assert set(kept.columns) == {"track", "time_s", "x_px", "y_px"}
+
+
+def test_through_a_lens_found_the_view_takes_the_lens_fits_elevation(monkeypatch) -> None:
+    """The paths read their ellipses as seen from far away (50 degrees for a render 60 degrees
+    above through a 65-degree lens); the lens's fit read 59, and the report said both, in two rows."""
+    import rotrate_cli.geometry as geometry_stage
+    from rotrate_cli.camera import Lens
+    from rotrate_cli.focal import FocalEstimate
+    from rotrate_cli.view import View
+
+    paths = View(50.0, (232.0, 134.0), 3.0, 211, 137.0, 0.0)
+    monkeypatch.setattr(geometry_stage, "view_from_paths", lambda tracks, omega: paths)
+    estimate = FocalEstimate(518.0, 63.4, 1 / 518.0, 1e-4, -59.0, 153, 0.3)
+    found = geometry_stage.Geometry(0.0, "lens", (228.5, 213.7), True, Lens(518.0, -59.0, "found", estimate), -59.0)
+    assert geometry_stage.settle_view(found, pd.DataFrame(), 0.2, "tracks", (640, 360)).view.elevation_deg == 59.0
+    orthographic = geometry_stage.Geometry(0.0, "paths", (228.5, 213.7), True, Lens(None), 50.0)
+    assert geometry_stage.settle_view(orthographic, pd.DataFrame(), 0.2, "tracks", (640, 360)).view is paths
