@@ -18,14 +18,19 @@ import numpy as np
 #: the median follows (against the first frame's, the accuracy suite's clips drift past 1%).
 FLICKER_GAIN = 0.01
 LIGHT_FRAMES = 9
+#: ... and by at most this fraction: a larger change is a cut, a fade or a light switched, not a
+#: flicker. Brought to the recent frames' median, a cut from black to the picture left it black
+#: for 5 frames (the median was black until most of the last 9 were not).
+FLICKER_MOST = 0.5
 
 
 def steady_light(levels: deque[float], level: float) -> float:
     """The factor that brings a frame of mean brightness ``level`` to the median of the recent
-    ``levels`` where it differs by more than :data:`FLICKER_GAIN` (else 1); ``level`` joins them."""
+    ``levels`` where it differs by more than :data:`FLICKER_GAIN` and at most :data:`FLICKER_MOST`
+    (else 1); ``level`` joins them."""
     usual = statistics.median(levels) if levels else level  # a few values: faster than numpy's
     levels.append(level)
-    if level > 0 and abs(usual / level - 1.0) > FLICKER_GAIN:
+    if level > 0 and FLICKER_GAIN < abs(usual / level - 1.0) <= FLICKER_MOST:
         return usual / level
     return 1.0
 

@@ -76,9 +76,12 @@ def test_a_still_clip_is_no_cut() -> None:
     assert cuts(frames) == []
 
 
-def test_a_clip_that_opens_on_another_picture_is_measured_on_its_turning(tmp_path) -> None:
-    """A calibration still before the turning starts (the real bicycle wheel's first frame): the
-    tracks seeded on it and the repetition read across it spoilt the measurement."""
+@pytest.mark.parametrize("opening", ["still", "black"])
+def test_a_clip_that_opens_on_another_picture_is_measured_on_its_turning(tmp_path, opening: str) -> None:
+    """A calibration still before the turning starts (the real bicycle wheel's first frame), or
+    half a second of black: the tracks seeded on it and the repetition read across it spoilt the
+    measurement. After black, the light's steadying held the picture black for 5 more frames
+    (brought to the recent frames' median brightness), and the cut was found 5 frames late."""
     from rotrate_cli.analysis import AnalysisConfig, analyze
     from rotrate_cli.synth import Renderer, SceneConfig
 
@@ -87,7 +90,8 @@ def test_a_clip_that_opens_on_another_picture_is_measured_on_its_turning(tmp_pat
     renderer = Renderer(scene)
     clip = tmp_path / "calibrated.mp4"
     writer = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"mp4v"), scene.fps, (scene.width_px, scene.height_px))
-    writer.write(still)
+    for _ in range(1 if opening == "still" else 15):
+        writer.write(still if opening == "still" else np.zeros_like(still))
     for index in range(scene.frame_count):
         writer.write(renderer.render(index))
     writer.release()
