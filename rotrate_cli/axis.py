@@ -293,9 +293,38 @@ def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, camera: Camera
     is ``offset / f - o / f = a (c - k x s) + b (s + k x c)``: linear in ``a, b, o`` again, with
     columns that depend on the data but not on ``o``.
     """
+    numerators, denominators, scale = _axis_terms(samples, omega_rad_s, camera, alpha_rad_s2, t0_s)
+    denominator = float(denominators.sum())
+    if denominator <= 0:
+        return math.nan
+    return scale * float(numerators.sum()) / denominator
+
+
+def axis_offset_se(samples: pd.DataFrame, omega_rad_s: float, camera: Camera | None = None) -> float:
+    """The standard error (px) of :func:`refine_axis_offset`'s shared offset, from how the tracks
+    disagree about it: the offset is a ratio of sums over tracks, and its variance is the
+    jackknife one over tracks (each left out in turn), which holds whatever each track's own
+    misfit (a window sliding on a real surface, a perspective the model leaves out) rather than
+    assuming the samples' errors independent, and weighs the tracks that carry most of the
+    offset as they deserve. NaN with fewer than 3 tracks."""
+    numerators, denominators, scale = _axis_terms(samples, omega_rad_s, camera, 0.0, 0.0)
+    count = len(numerators)
+    total_n, total_d = float(numerators.sum()), float(denominators.sum())
+    rest = total_d - denominators
+    if count < 3 or total_d <= 0 or (rest <= 0).any():
+        return math.nan
+    left_out = (total_n - numerators) / rest
+    return scale * math.sqrt((count - 1) / count * float(((left_out - left_out.mean()) ** 2).sum()))
+
+
+def _axis_terms(samples: pd.DataFrame, omega_rad_s: float, camera: Camera | None, alpha_rad_s2: float,
+                t0_s: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """Per track, ``1.(I - P) offset`` and ``1.(I - P) 1`` of :func:`refine_axis_offset`'s
+    closed form (offsets divided by the returned scale: the focal length with a pinhole camera,
+    else 1); empty arrays where there is nothing to fit."""
     tracks = Ragged.from_samples(samples)
     if len(tracks) == 0 or not (math.isfinite(omega_rad_s) and math.isfinite(alpha_rad_s2)):
-        return math.nan
+        return np.empty(0), np.empty(0), 1.0
     # a steady rate, or one changing steadily (a spin-up): the turn's angle at each time
     elapsed = tracks.times_s - t0_s
     angle = omega_rad_s * elapsed + 0.5 * alpha_rad_s2 * elapsed ** 2
@@ -310,15 +339,14 @@ def refine_axis_offset(samples: pd.DataFrame, omega_rad_s: float, camera: Camera
     sums = tracks.sums
     cc, ss, cs, sum_c, sum_s = sums(c * c), sums(s_ * s_), sums(c * s_), sums(c), sums(s_)
 
-    def unexplained_dot_one(sum_v: np.ndarray, sum_cv: np.ndarray, sum_sv: np.ndarray) -> float:
-        """``sum over tracks of 1.(I - P) v`` from the sums of ``v``, ``c v`` and ``s v``."""
+    def unexplained_dot_one(sum_v: np.ndarray, sum_cv: np.ndarray, sum_sv: np.ndarray) -> np.ndarray:
+        """Per track, ``1.(I - P) v`` from the sums of ``v``, ``c v`` and ``s v``."""
         a, b = solve_two_columns(cc, ss, cs, sum_cv, sum_sv)
-        return float((sum_v - a * sum_c - b * sum_s).sum())
+        return sum_v - a * sum_c - b * sum_s
 
-    denominator = unexplained_dot_one(tracks.counts.astype(float), sum_c, sum_s)
-    if denominator <= 0:
-        return math.nan
-    return scale * unexplained_dot_one(sums(y), sums(c * y), sums(s_ * y)) / denominator
+    denominators = unexplained_dot_one(tracks.counts.astype(float), sum_c, sum_s)
+    numerators = unexplained_dot_one(sums(y), sums(c * y), sums(s_ * y))
+    return np.asarray(numerators, dtype=np.float64), np.asarray(denominators, dtype=np.float64), scale
 
 
 def point_on_axis(offset_px: float, angle_deg: float, tracks: pd.DataFrame) -> tuple[float, float]:

@@ -14,7 +14,7 @@ import numpy as np
 from rotrate_cli.camera import WIDEST_FOV_DEG, with_lens_doubt
 from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.fits import RateResult, changes, rate_change
-from rotrate_cli.geometry import Geometry, fixation_doubt
+from rotrate_cli.geometry import AxisSpread, Geometry, fixation_doubt
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.outliers import Combined, combine
 from rotrate_cli.view import rate_from_paths, view_from_paths
@@ -56,6 +56,8 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
     if not config.points_px:
         result, lone = with_lone_track(result, fps)
         doubts += (lone,) if lone else ()
+    result, axis_note = with_axis_doubt(result, geometry.axis_spread)
+    lens_notes += (axis_note,) if axis_note else ()
     camera = geometry.camera(size_px)
     doubt = fixation_doubt(result, geometry, config, size_px)
     if doubt is not None:
@@ -149,6 +151,37 @@ def with_lone_track(result: RateResult, fps: float) -> tuple[RateResult, str | N
     widened = replace(result, combined=Combined(combined.omega_rad_s, 0.0, high, 1))
     return widened, (f"one track alone gave the rate, and nothing says it lies on the turning body: the 95% interval "
                      f"runs from 0 to {'half a turn a frame' if math.isfinite(high) else 'any rate'}")
+
+
+#: The normal distribution's two-sided 95% point.
+Z95 = 1.96
+#: A found axis's placement that widens the interval's half-width more than this many times is told.
+AXIS_WIDENS = 1.5
+
+
+def with_axis_doubt(result: RateResult, spread: AxisSpread | None) -> tuple[RateResult, str | None]:
+    """The result with its interval widened (in quadrature) by the found axis's placement: its
+    standard error across the axis times the rate's change per pixel across it, at 95%
+    (:class:`rotrate_cli.geometry.AxisSpread`); and a note where that widened it much. The tracks'
+    own interval holds the axis where it was put, while the same tracks place it only so well:
+    on arcs shorter than a turn, a pixel across moves the rate by about a percent (an EPFL car's
+    first 50 photographs: +3.5% within [+0.9%, +6.2%], the truth's axis 4 px away)."""
+    combined = result.combined
+    if spread is None or combined.tracks_used == 0 or not math.isfinite(combined.omega_rad_s):
+        return result, None
+    reach = Z95 * spread.rate_se_rad_s
+    if not (math.isfinite(reach) and reach > 0):
+        return result, None
+    omega = combined.omega_rad_s
+    low = omega - math.hypot(omega - combined.omega_low_rad_s, reach)
+    high = omega + math.hypot(combined.omega_high_rad_s - omega, reach)
+    widened = replace(result, combined=Combined(omega, low, high, combined.tracks_used))
+    before = combined.omega_high_rad_s - combined.omega_low_rad_s
+    if not (high - low > AXIS_WIDENS * before):
+        return widened, None
+    return widened, (f"the axis found from the tracks is placed to +-{spread.se_px:.1f} px across itself, which moves "
+                     f"the rate by +-{abs(100 * spread.rate_se_rad_s / omega):.1f}%: the 95% interval holds that; "
+                     "give --fixation X,Y if you know a point on the axis")
 
 
 def with_clock_doubt(result: RateResult, clock_resolution_s: float) -> RateResult:
