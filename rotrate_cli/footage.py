@@ -109,7 +109,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         thumbnails.clear()
         run = _track(video, config, tracker, progress, thumbnails)
     _check_tracked(run, thumbnails, source)
-    shot = None if config.points_px else longest_shot(thumbnails.times_s, thumbnails.images)
+    shot = None if config.points_px else longest_shot(thumbnails.times_s, thumbnails.images, thumbnails.levels)
     if shot is not None:
         # the clip cuts: tracks do not cross a cut, and the repetition is another scene's too
         last = shot.last == len(thumbnails.times_s) - 1  # to the clip's end (thumbnails stop at a long clip's)

@@ -159,6 +159,7 @@ class Thumbnails:
         self.steady_light = steady_light  # flickering light taken out (videos; see rotrate_cli.light)
         self._images: list[np.ndarray] = []
         self._times: list[float] = []
+        self._levels: list[float] = []  # each thumbnail's mean brightness, before the light's steadying
         self._light = SteadyLight()
 
     def tap(self, frames: Iterator[Frame]) -> Iterator[Frame]:
@@ -178,6 +179,7 @@ class Thumbnails:
         scale = THUMB_SIDE_PX / max(image.shape[:2])
         small = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA) if scale < 1 else image
         small = np.asarray(small, dtype=np.uint8)
+        self._levels.append(float(cv2.mean(small)[0]))
         if self.steady_light:
             small = self._light.steadied(small)
         self._images.append(small.ravel())
@@ -202,11 +204,17 @@ class Thumbnails:
     def clear(self) -> None:
         self._images.clear()
         self._times.clear()
+        self._levels.clear()
         self._light.clear()
 
     @property
     def times_s(self) -> np.ndarray:
         return np.asarray(self._times, dtype=np.float64)
+
+    @property
+    def levels(self) -> np.ndarray:
+        """Each frame's mean brightness (0-255), as it came: before the light's steadying."""
+        return np.asarray(self._levels, dtype=np.float64)
 
     @property
     def images(self) -> np.ndarray:
