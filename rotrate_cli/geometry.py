@@ -280,10 +280,8 @@ def _axis_spread(
 ) -> AxisSpread | None:
     """How well the found ``fixation`` is placed across the axis (the inlier tracks' shared-axis
     least squares, its jackknife standard error over tracks) and the rate's change per pixel
-    across it, measured about the point moved by that much; None where either cannot be had. The tracks'
-    interval holds the axis where it was put: on an EPFL car's first 50 photographs (a 67-degree
-    lens, a side view), an axis 4 px across from the truth's read +3.5% within [+0.9%, +6.2%], and
-    the truth's point -0.1%."""
+    across it, measured about the point moved by that much; None where either cannot be had
+    (see :func:`rotrate_cli.doubts.with_axis_doubt`)."""
     offsets, omega = _inliers_and_rate(result, camera)
     se_px = axes.axis_offset_se(offsets, omega, camera)
     if not (math.isfinite(se_px) and math.isfinite(result.combined.omega_rad_s)):
