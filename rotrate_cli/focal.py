@@ -187,17 +187,63 @@ class _Model:
     def residuals(self, params: np.ndarray) -> np.ndarray:
         return (self.predict(params) - self.observed).ravel()
 
-    def sparsity(self):  # a scipy.sparse.lil_matrix
-        from scipy.sparse import lil_matrix  # scipy is imported only when the focal length is sought
+    def jacobian(self, params: np.ndarray):  # a scipy.sparse.csr_matrix
+        """The residuals' derivatives, worked out (each sample's two rows depend on the shared
+        unknowns and its own track's three only). Finite differences of :meth:`residuals` took
+        nine evaluations of the model a step and most of the fit's time."""
+        from scipy.sparse import csr_matrix  # scipy is imported only when the focal length is sought
 
-        tracks = len(self.counts)
-        pattern = lil_matrix((2 * len(self.owner), SHARED + 3 * tracks), dtype=np.int8)
-        rows = np.arange(2 * len(self.owner))
-        pattern[:, :SHARED] = 1
-        owner2 = np.repeat(self.owner, 2)
-        for k in range(3):
-            pattern[rows, SHARED + 3 * owner2 + k] = 1
-        return pattern
+        g, elevation, omega, angle, across = params[:SHARED]
+        per_track = params[SHARED:].reshape(-1, 3)[self.owner]
+        height, a, b = per_track[:, 0], per_track[:, 1], per_track[:, 2]
+        e1, up, e2 = self.frame(elevation, angle)
+        # the frame's derivatives by the elevation and by the angle (e1 = (cos, sin, 0) of the angle)
+        up_elevation = np.array([-math.sin(elevation) * e1[1], math.sin(elevation) * e1[0], -math.cos(elevation)])
+        e1_angle = np.array([-e1[1], e1[0], 0.0])
+        up_angle = np.array([math.cos(elevation) * e1_angle[1], -math.cos(elevation) * e1_angle[0], 0.0])
+        e2_elevation = np.cross(up_elevation, e1)
+        e2_angle = np.cross(up_angle, e1) + np.cross(up, e1_angle)
+        time_s = self.time_s
+        c, s = np.cos(omega * time_s), np.sin(omega * time_s)
+        along1, along2 = a * c - b * s, a * s + b * c
+        point = height[:, None] * up + along1[:, None] * e1 + along2[:, None] * e2
+        raw_depth = 1.0 + g * point[:, 2]
+        free = raw_depth > 0.05  # where the depth is clamped, it depends on nothing
+        depth = np.where(free, raw_depth, 0.05)
+        out = (self.axis_px + across * e1[:2] + point[:, :2]) / depth[:, None]
+
+        def column(d_point: np.ndarray, d_numerator_extra: np.ndarray | None = None,
+                   d_depth_g: np.ndarray | None = None) -> np.ndarray:
+            """d(out)/d(unknown), n x 2, from the point's derivative (n x 3 or 3)."""
+            d_point = np.broadcast_to(d_point, point.shape)
+            d_depth = g * d_point[:, 2] if d_depth_g is None else d_depth_g
+            d_numerator = d_point[:, :2] if d_numerator_extra is None else d_point[:, :2] + d_numerator_extra
+            return (d_numerator - out * np.where(free, d_depth, 0.0)[:, None]) / depth[:, None]
+
+        zero3 = np.zeros(3)
+        shared = [
+            column(zero3, d_depth_g=point[:, 2]),  # g
+            column(height[:, None] * up_elevation + along2[:, None] * e2_elevation),  # elevation
+            column(time_s[:, None] * (-along2[:, None] * e1 + along1[:, None] * e2)),  # omega
+            column(height[:, None] * up_angle + along1[:, None] * e1_angle + along2[:, None] * e2_angle,
+                   across * e1_angle[:2]),  # angle
+            column(zero3, np.broadcast_to(e1[:2], out.shape)),  # across
+        ]
+        own = [
+            column(up),  # height
+            column(c[:, None] * e1 + s[:, None] * e2),  # a
+            column(-s[:, None] * e1 + c[:, None] * e2),  # b
+        ]
+        samples = len(self.owner)
+        rows = np.arange(2 * samples)
+        shared_values = np.stack([d.ravel() for d in shared], axis=1)  # 2n x SHARED
+        own_values = np.stack([d.ravel() for d in own], axis=1)  # 2n x 3
+        own_columns = SHARED + 3 * np.repeat(self.owner, 2)[:, None] + np.arange(3)
+        all_rows = np.repeat(rows, SHARED + 3)
+        all_columns = np.concatenate([np.broadcast_to(np.arange(SHARED), (2 * samples, SHARED)), own_columns],
+                                     axis=1).ravel()
+        values = np.concatenate([shared_values, own_values], axis=1).ravel()
+        return csr_matrix((values, (all_rows, all_columns)), shape=(2 * samples, SHARED + 3 * len(self.counts)))
 
     def linear_start(self, elevation: float, omega: float) -> np.ndarray:
         """Per-track ``Y, a, b`` by linear least squares with ``g = 0`` (orthographic)."""
@@ -321,7 +367,7 @@ def _fit(model: _Model, params: np.ndarray, loss: str):
 
     lower = np.full(len(params), -np.inf)
     lower[0] = 0.0
-    return least_squares(model.residuals, params, jac_sparsity=model.sparsity(), bounds=(lower, np.inf),
+    return least_squares(model.residuals, params, jac=model.jacobian, bounds=(lower, np.inf),
                          loss=loss, f_scale=1.0, x_scale="jac", max_nfev=60)
 
 

@@ -213,3 +213,27 @@ def test_the_lens_fit_moves_an_axis_point_found_off_the_axis() -> None:
     assert found.focal_px == pytest.approx(focal, rel=0.03)
     assert found.elevation_deg == pytest.approx(60.0, abs=1.0)
     assert found.fixation_px[0] == pytest.approx(319.5, abs=1.5)
+
+
+@pytest.mark.parametrize("inverse_focal", [0.0, 1 / 900, 1 / 40])
+def test_jacobian_matches_differences(inverse_focal: float) -> None:
+    """The lens fit's worked-out derivatives against central differences of its residuals, at
+    an orthographic camera, a usual lens and one so wide that some depths are clamped."""
+    from rotrate_cli.focal import SHARED, _Model
+
+    rng = np.random.default_rng(3)
+    chosen = [(np.sort(rng.random(20) * 3.0), rng.random(20) * 100 + 200, rng.random(20) * 50 + 100)
+              for _ in range(12)]
+    model = _Model(chosen, np.array([319.5, 179.5]), np.array([10.0, -5.0]), 7.0)
+    params = np.r_[inverse_focal, 0.3, 0.9, math.radians(7.0), 2.0, rng.normal(0.0, 60.0, 3 * len(chosen))]
+    worked = model.jacobian(params).toarray()
+    step = 1e-6
+    differences = np.empty_like(worked)
+    for column in range(len(params)):
+        up, down = params.copy(), params.copy()
+        up[column] += step
+        down[column] -= step
+        differences[:, column] = (model.residuals(up) - model.residuals(down)) / (2 * step)
+    scale = np.abs(differences).max(axis=0) + 1e-9
+    assert worked.shape == (2 * 12 * 20, SHARED + 3 * 12)
+    assert (np.abs(worked - differences).max(axis=0) / scale).max() < 1e-5
