@@ -137,6 +137,24 @@ def _choose(tracks: pd.DataFrame, omega_rad_s: float) -> list[tuple[np.ndarray, 
     return chosen
 
 
+@dataclass(frozen=True)
+class _Posed:
+    """The model's samples under one set of unknowns: each sample's height, cos and sin of its
+    turn, in-plane coordinates, the frame ``(e1, up, e2)``, its point, whether its depth is free
+    (not held at the nearest allowed), the depth, and its image (relative to the principal point)."""
+
+    height: np.ndarray
+    cos: np.ndarray
+    sin: np.ndarray
+    along1: np.ndarray
+    along2: np.ndarray
+    frame: tuple[np.ndarray, np.ndarray, np.ndarray]
+    point: np.ndarray
+    free: np.ndarray
+    depth: np.ndarray
+    image: np.ndarray
+
+
 class _Model:
     """The rigid-turn pinhole model over a fixed set of tracks (see the module's notes)."""
 
@@ -162,18 +180,24 @@ class _Model:
         up = np.array([math.cos(elevation_rad) * uy, -math.cos(elevation_rad) * ux, -math.sin(elevation_rad)])
         return e1, up, np.cross(up, e1)
 
-    def predict(self, params: np.ndarray) -> np.ndarray:
+    def _posed(self, params: np.ndarray) -> _Posed:
+        """Every sample's point and its image under ``params`` (for :meth:`predict` and
+        :meth:`jacobian`)."""
         g, elevation, omega, angle, across = params[:SHARED]
         per_track = params[SHARED:].reshape(-1, 3)[self.owner]
         height, a, b = per_track[:, 0], per_track[:, 1], per_track[:, 2]
         e1, up, e2 = self.frame(elevation, angle)
-        axis_px = self.axis_px + across * e1[:2]
         c, s = np.cos(omega * self.time_s), np.sin(omega * self.time_s)
         along1, along2 = a * c - b * s, a * s + b * c
         point = height[:, None] * up + along1[:, None] * e1 + along2[:, None] * e2
-        depth = 1.0 + g * point[:, 2]
-        depth = np.where(depth > 0.05, depth, 0.05)
-        return (axis_px + point[:, :2]) / depth[:, None]
+        raw_depth = 1.0 + g * point[:, 2]
+        free = raw_depth > 0.05  # nearer than that (a fit's wild trial) the depth is held
+        depth = np.where(free, raw_depth, 0.05)
+        image = (self.axis_px + across * e1[:2] + point[:, :2]) / depth[:, None]
+        return _Posed(height, c, s, along1, along2, (e1, up, e2), point, free, depth, image)
+
+    def predict(self, params: np.ndarray) -> np.ndarray:
+        return self._posed(params).image
 
     def lateral_fraction(self, params: np.ndarray) -> np.ndarray:
         """Each sample's offset across the line of sight as a fraction of its radius: |sin| of
@@ -193,10 +217,11 @@ class _Model:
         nine evaluations of the model a step and most of the fit's time."""
         from scipy.sparse import csr_matrix  # scipy is imported only when the focal length is sought
 
-        g, elevation, omega, angle, across = params[:SHARED]
-        per_track = params[SHARED:].reshape(-1, 3)[self.owner]
-        height, a, b = per_track[:, 0], per_track[:, 1], per_track[:, 2]
-        e1, up, e2 = self.frame(elevation, angle)
+        g, elevation, _, _, across = params[:SHARED]
+        posed = self._posed(params)
+        height, c, s, along1, along2 = posed.height, posed.cos, posed.sin, posed.along1, posed.along2
+        e1, up, e2 = posed.frame
+        point, free, depth, out = posed.point, posed.free, posed.depth, posed.image
         # the frame's derivatives by the elevation and by the angle (e1 = (cos, sin, 0) of the angle)
         up_elevation = np.array([-math.sin(elevation) * e1[1], math.sin(elevation) * e1[0], -math.cos(elevation)])
         e1_angle = np.array([-e1[1], e1[0], 0.0])
@@ -204,13 +229,6 @@ class _Model:
         e2_elevation = np.cross(up_elevation, e1)
         e2_angle = np.cross(up_angle, e1) + np.cross(up, e1_angle)
         time_s = self.time_s
-        c, s = np.cos(omega * time_s), np.sin(omega * time_s)
-        along1, along2 = a * c - b * s, a * s + b * c
-        point = height[:, None] * up + along1[:, None] * e1 + along2[:, None] * e2
-        raw_depth = 1.0 + g * point[:, 2]
-        free = raw_depth > 0.05  # where the depth is clamped, it depends on nothing
-        depth = np.where(free, raw_depth, 0.05)
-        out = (self.axis_px + across * e1[:2] + point[:, :2]) / depth[:, None]
 
         def column(d_point: np.ndarray, d_numerator_extra: np.ndarray | None = None,
                    d_depth_g: np.ndarray | None = None) -> np.ndarray:
