@@ -212,11 +212,13 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     view_tracks = keep_for_view(tracks)  # the view is read at the rate reported, once it is known
     places = track_places(tracks)  # where each track lies: to name why the rejected were
     try:
-        geometry, body = locate(tracks, footage.motion_angle_deg, config, footage.info, seek_lens=period is None)
+        geometry, body = locate(tracks, footage.motion_angle_deg, config, footage.info, seek_lens=period is None,
+                                keyframes=footage.keyframes)
     except NoResultError:
         if period is None:
             raise
         return _repetition_only(footage, period, config, kept, view_tracks)
+    footage.keyframes.clear()
     footage = replace(footage, tracks=tracks.iloc[:0])
     del tracks  # the offsets hold what is needed: a long clip's positions need not stay
     release_free_memory()

@@ -16,6 +16,7 @@ from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.decode import VideoInfo
 from rotrate_cli.fits import RateResult, rates_from_offsets
 from rotrate_cli.focal import ORTHOGRAPHIC_WIDTHS, FocalEstimate, estimate_focal
+from rotrate_cli.keyframes import Keyframes
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.outliers import Combined, RejectionConfig
 
@@ -89,19 +90,21 @@ def camera_at(lens: Lens, size_px: tuple[int, int], fixation_px: tuple[float, fl
 
 
 def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg: float, lens: Lens,
-              size_px: tuple[int, int], elevation_guess_deg: float = math.nan) -> Lens:
+              size_px: tuple[int, int], elevation_guess_deg: float = math.nan,
+              keyframes: Keyframes | None = None) -> Lens:
     """The focal length (and elevation, unless given) found from the tracks, at a first rate from
     their recurrence; orthographic when no perspective shows, and ``unsettled`` (``estimate``
     None) when too few tracks turn far enough to tell, or the clip's halves turn at different
     rates both through the orthographic camera and through the lens found (a rate that changes:
-    a lens's model holds one steady rate)."""
+    a lens's model holds one steady rate). ``keyframes``: the tracker's images kept, on which
+    the lens fit's samples are placed again (:mod:`rotrate_cli.patches`)."""
     offsets = axes.offsets_along(tracks, fixation_px, angle_deg)
     omega = axes.rate_from_recurrence(tracks, offsets)
     if not (math.isfinite(omega) and omega > 0):
         return replace(lens, unsettled=True)
     changing = _changing(tracks, offsets)
     elevation = next((value for value in (lens.elevation_deg, elevation_guess_deg) if math.isfinite(value)), 0.0)
-    estimate = estimate_focal(tracks, fixation_px, angle_deg, omega, size_px, elevation)
+    estimate = estimate_focal(tracks, fixation_px, angle_deg, omega, size_px, elevation, keyframes)
     if estimate is None or (changing and not math.isfinite(estimate.focal_px)):
         return replace(lens, unsettled=True)
     if not math.isfinite(estimate.focal_px):

@@ -24,6 +24,7 @@ from rotrate_cli.csrt import CsrtTracker, csrt_settings
 from rotrate_cli.decode import FrameSource, VideoInfo, prefetch
 from rotrate_cli.errors import InputError, NoResultError
 from rotrate_cli.fits import no_result_message
+from rotrate_cli.keyframes import Keyframes
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.period import Thumbnails
@@ -61,6 +62,7 @@ class Footage:
         info: the source's size, clock and lens (:class:`rotrate_cli.decode.VideoInfo`).
         tracks: ``frame, time_s, track, x_px, y_px`` sorted by track then frame (tracks from 0).
         thumbnails: a small grey picture of each frame, for the clip's repetition.
+        keyframes: some of the tracker's own images, evenly over the clip, for the lens's fit.
         frames: frames analysed.
         duration_s: time from the first to the last analysed frame, seconds.
         motion_angle_deg: the axis's angle in the image as the tracks' motion shows it (the
@@ -75,6 +77,7 @@ class Footage:
     info: VideoInfo
     tracks: pd.DataFrame
     thumbnails: Thumbnails
+    keyframes: Keyframes
     frames: int
     duration_s: float
     motion_angle_deg: float
@@ -98,7 +101,8 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     if config.axis_angle_deg is not None and across(config.axis_angle_deg):
         tracker = turned(tracker)
     thumbnails = Thumbnails()
-    run = _track(video, config, tracker, progress, thumbnails)
+    keyframes = Keyframes(tracking_scale(info.width_px, tracker))
+    run = _track(video, config, tracker, progress, thumbnails, keyframes)
     if run.frames == 0:
         raise InputError(f"no frame of {source} lies between --start and --end")
     if run.frames < 3:
@@ -107,7 +111,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         # OpenCV's trouble with interlaced streams: black frames, or one frozen garbled picture;
         # it strikes some openings of a file and not others, so it is caught here too
         thumbnails.clear()
-        run = _track(video, config, tracker, progress, thumbnails)
+        run = _track(video, config, tracker, progress, thumbnails, keyframes)
     _check_tracked(run, thumbnails, source)
     shot = None if config.points_px else longest_shot(thumbnails.times_s, thumbnails.images, thumbnails.levels)
     if shot is not None:
@@ -115,7 +119,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         last = shot.last == len(thumbnails.times_s) - 1  # to the clip's end (thumbnails stop at a long clip's)
         config = replace(config, start_s=shot.start_s, end_s=config.end_s if last else shot.end_s)
         thumbnails.clear()
-        run = _track(video, config, tracker, progress, thumbnails)
+        run = _track(video, config, tracker, progress, thumbnails, keyframes)
         _check_tracked(run, thumbnails, source)
     tracks = by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
@@ -124,7 +128,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         # a hand-held camera: track again knowing its motion, so that the still background is let
         # go of as on a tripod and the points go to the body; the positions as a still camera saw them
         thumbnails.clear()
-        run = _track(video, config, tracker, progress, thumbnails, shaken[0])
+        run = _track(video, config, tracker, progress, thumbnails, keyframes, shaken[0])
         tracks = shaken[0].steady(by_track(run.tracks))
     angle = config.axis_angle_deg if config.axis_angle_deg is not None else math.nan
     if config.axis_angle_deg is None and tracks["track"].nunique() >= MIN_TRACKS_FOR_ANGLE:
@@ -133,7 +137,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
             # the motion runs up and down the image: track again with the window turned to suit it
             thumbnails.clear()
             camera = None if shaken is None else shaken[0]
-            run = _track(video, config, turned(tracker), progress, thumbnails, camera)
+            run = _track(video, config, turned(tracker), progress, thumbnails, keyframes, camera)
             if run.tracks.empty:
                 raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
             tracks = by_track(run.tracks) if camera is None else camera.steady(by_track(run.tracks))
@@ -143,6 +147,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     warnings += [warning for warning in video.warnings if warning not in warnings]
     notes = list(run.notes) + warnings + ([] if shot is None else [shot.note])
     shake, camera = (None, None) if shaken is None else (shaken[1], shaken[0])
+    keyframes.camera = camera
     if shake is not None:
         notes.append(f"the camera shook ({shake.rms_px:.1f} px rms, at most {shake.largest_px:.1f} px): the tracks are "
                      f"measured as a still camera would see them, from {shake.background_tracks} still background "
@@ -151,7 +156,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         short = video.shortfall(run.frames, run.last_time_s)
         if short is not None:
             notes.append(short)
-    return Footage(info, tracks, thumbnails, run.frames, run.last_time_s - run.first_time_s, float(angle),
+    return Footage(info, tracks, thumbnails, keyframes, run.frames, run.last_time_s - run.first_time_s, float(angle),
                    tuple(notes), shake, camera)
 
 
@@ -209,9 +214,11 @@ def turned(tracker: TrackerConfig) -> TrackerConfig:
 
 
 def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
-           progress: ProgressCallback | None, thumbnails: Thumbnails, camera: CameraPath | None = None) -> TrackingRun:
+           progress: ProgressCallback | None, thumbnails: Thumbnails, keyframes: Keyframes,
+           camera: CameraPath | None = None) -> TrackingRun:
     """Decode (in a background thread) and track the frames of ``video`` between start and end,
-    keeping a thumbnail of each in ``thumbnails``; ``camera``: its own motion, where known."""
+    keeping a thumbnail of each in ``thumbnails`` and some of the tracker's images in
+    ``keyframes`` (emptied first); ``camera``: its own motion, where known."""
     info = video.info
     scale = tracking_scale(info.width_px, tracker)
     blur = tracker.blur_sigma_px
@@ -229,8 +236,10 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
     size_px = (info.width_px, info.height_px)
     stream = thumbnails.tap(prefetch(frames))
+    keyframes.clear()
     if config.points_px:
         return follow_points(stream, size_px, list(config.points_px), config.tracker_kind, tracker, notify)
+    stream = keyframes.tap(stream)
     if config.tracker_kind == "csrt":
         return track_frames(stream, size_px, csrt_settings(tracker), notify, kind=CsrtTracker, camera=camera)
     return track_frames(stream, size_px, tracker, notify, camera=camera)

@@ -29,6 +29,7 @@ from rotrate_cli.decode import VideoInfo
 from rotrate_cli.errors import NoResultError
 from rotrate_cli.fits import JOINT_MIN_TRACKS, RateResult, changes, half_rates, rates_from_offsets, thin
 from rotrate_cli.footage import MIN_TRACKS_FOR_ANGLE
+from rotrate_cli.keyframes import Keyframes
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import Combined
@@ -176,11 +177,12 @@ def looks_down(tracks: pd.DataFrame) -> bool:
 
 
 def locate(tracks: pd.DataFrame, motion_angle_deg: float, config: AnalysisConfig, info: VideoInfo,
-           seek_lens: bool) -> tuple[Geometry, PreparedBody]:
+           seek_lens: bool, keyframes: Keyframes | None = None) -> tuple[Geometry, PreparedBody]:
     """Step 1 (see the module's notes). ``tracks``: ``frame, time_s, track, x_px, y_px`` of one
     body, sorted by track then frame; the caller may let them go afterwards. ``seek_lens``: find
     the lens from the tracks where none is given or read (it costs seconds at 720p, and a rate
-    from the clip's repetition needs no camera).
+    from the clip's repetition needs no camera); ``keyframes``: the tracker's images kept, on which
+    the lens's fit places its samples again.
 
     Raises:
         NoResultError: the axis cannot be found from the tracks.
@@ -194,7 +196,7 @@ def locate(tracks: pd.DataFrame, motion_angle_deg: float, config: AnalysisConfig
             and not config.points_px):
         # the paths' elevation reads their ellipses as seen from far away: it only starts the lens's
         # fit, which finds the elevation with the perspective
-        lens = find_lens(tracks, fixation, angle, lens, size_px, paths_elevation)
+        lens = find_lens(tracks, fixation, angle, lens, size_px, paths_elevation, keyframes)
         if lens.estimate is not None and math.isfinite(lens.estimate.focal_px):
             elevation = lens.estimate.elevation_deg
             if config.axis_angle_deg is None and config.angle_from == "auto":

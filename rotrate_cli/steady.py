@@ -139,15 +139,20 @@ class CameraPath:
         dx, dy = x - shift[..., 0], y - shift[..., 1]
         return cos * dx + sin * dy, -sin * dx + cos * dy
 
+    def redo(self, frame: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Steadied positions at frames ``frame`` where the shaken camera saw them (undoes
+        :meth:`undo`)."""
+        at = self._at(frame)
+        angle, shift = self.angle_rad[at], self.shift_px[at]
+        cos, sin = np.cos(angle), np.sin(angle)
+        return cos * x - sin * y + shift[..., 0], sin * x + cos * y + shift[..., 1]
+
     def seen(self, tracks: pd.DataFrame) -> pd.DataFrame:
         """Steadied ``tracks`` (``frame, x_px, y_px``) where the shaken camera saw them: on its
         own frames (an overlay draws them there)."""
-        at = self._at(tracks["frame"].to_numpy())
-        angle, shift = self.angle_rad[at], self.shift_px[at]
-        cos, sin = np.cos(angle), np.sin(angle)
-        x, y = tracks["x_px"].to_numpy(dtype=np.float64), tracks["y_px"].to_numpy(dtype=np.float64)
-        return tracks.assign(x_px=(cos * x - sin * y + shift[:, 0]).astype(tracks["x_px"].dtype),
-                             y_px=(sin * x + cos * y + shift[:, 1]).astype(tracks["y_px"].dtype))
+        x, y = self.redo(tracks["frame"].to_numpy(), tracks["x_px"].to_numpy(dtype=np.float64),
+                         tracks["y_px"].to_numpy(dtype=np.float64))
+        return tracks.assign(x_px=x.astype(tracks["x_px"].dtype), y_px=y.astype(tracks["y_px"].dtype))
 
     def steady(self, tracks: pd.DataFrame) -> pd.DataFrame:
         """``tracks`` (``frame, x_px, y_px``) as the camera saw them from where it stood at the
