@@ -208,6 +208,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         return _segmented(footage, config)
     period = _repetition(footage, config)
     footage.thumbnails.clear()
+    if period is not None:
+        footage.keyframes.clear()  # a rate from the repetition needs no lens: its images are not wanted
     kept = _kept_tracks(tracks, footage.camera) if config.keep_tracks else None
     view_tracks = keep_for_view(tracks)  # the view is read at the rate reported, once it is known
     places = track_places(tracks)  # where each track lies: to name why the rejected were
