@@ -34,14 +34,20 @@ def _texture(seed: int = 0) -> np.ndarray:
     return cv2.GaussianBlur(rng.uniform(0, 255, (240, 320)).astype(np.float32), (0, 0), 2.0)
 
 
+def _kept(frames: list[Frame]) -> Keyframes:
+    keyframes = Keyframes(scale=1.0)
+    for _ in keyframes.tap(iter(frames)):
+        pass
+    return keyframes
+
+
 def test_a_deforming_patch_is_placed_where_its_centre_went() -> None:
     """A surface patch that narrows, shears and dims as it turns away (as on a sphere), and a
     tracker whose positions drifted by up to 1.5 px: placed again within 0.1 px of where the
     patch's centre really went."""
     texture = _texture()
     centre = np.array([160.0, 120.0])
-    keyframes = Keyframes(scale=1.0)
-    truth, tracked = [], []
+    pictures, truth, tracked = [], [], []
     for k in range(12):
         squeeze, shear, gain = 1.0 - 0.04 * k, 0.02 * k, 1.0 - 0.03 * k
         where = np.array([150.0 + 3.1 * k, 110.0 + 0.4 * k])
@@ -49,9 +55,10 @@ def test_a_deforming_patch_is_placed_where_its_centre_went() -> None:
         # the picture at frame k: texture point p appears at where + linear (p - centre)
         matrix = np.hstack([linear, (where - linear @ centre)[:, None]])
         picture = cv2.warpAffine(texture, matrix, (320, 240), flags=cv2.INTER_LINEAR) * gain + 10
-        keyframes._add(k, np.clip(picture, 0, 255).astype(np.uint8))
+        pictures.append(Frame(k, k / 30.0, np.clip(picture, 0, 255).astype(np.uint8)))
         truth.append(where)
         tracked.append(where + np.array([0.2 * k / 11, 1.5 * k / 11]))
+    keyframes = _kept(pictures)
     truth_xy, tracked_xy = np.array(truth), np.array(tracked)
     x, y = place_again(keyframes, np.arange(12), tracked_xy[:, 0], tracked_xy[:, 1])
     assert np.isfinite(x).all()
@@ -61,9 +68,7 @@ def test_a_deforming_patch_is_placed_where_its_centre_went() -> None:
 
 def test_a_patch_that_does_not_match_is_left_out() -> None:
     """Where the picture at the tracker's position is something else, no position is made up."""
-    keyframes = Keyframes(scale=1.0)
-    keyframes._add(0, _texture(0).astype(np.uint8))
-    keyframes._add(1, _texture(1).astype(np.uint8))
+    keyframes = _kept([Frame(index, index / 30.0, _texture(index).astype(np.uint8)) for index in (0, 1)])
     x, y = place_again(keyframes, np.array([0, 1]), np.array([160.0, 160.0]), np.array([120.0, 120.0]))
     assert x[0] == pytest.approx(160.0) and math.isnan(x[1]) and math.isnan(y[1])
 
