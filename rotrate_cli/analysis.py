@@ -43,6 +43,7 @@ from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import FEATURE_COLUMNS, Combined, RejectionConfig
 from rotrate_cli.period import Period, find_period
+from rotrate_cli.pools import pipeline_threads
 from rotrate_cli.rates import Camera
 from rotrate_cli.reasons import name_rejections, track_places
 from rotrate_cli.segment import Body
@@ -181,7 +182,8 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     """
     check_config(config)
     try:
-        return _analyze(source, config, progress, stage)
+        with pipeline_threads():
+            return _analyze(source, config, progress, stage)
     except NoResultError as error:
         if (config.every or 1) > 1 and " short" in str(error):
             raise NoResultError(f"{error}; --every {config.every} keeps one frame in {config.every}, which leaves "

@@ -1,0 +1,51 @@
+"""The libraries' thread pools while an analysis runs (rotrate_cli/pools.py)."""
+
+from __future__ import annotations
+
+import threading
+
+import cv2
+import pytest
+
+from rotrate_cli.pools import available_cores, opencv_threads, pipeline_threads
+
+
+def test_pools_are_sized_for_the_run_and_put_back() -> None:
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    before = cv2.getNumThreads()
+    blas_before = [info["num_threads"] for info in threadpoolctl.threadpool_info() if info["user_api"] == "blas"]
+    with pipeline_threads():
+        assert cv2.getNumThreads() == opencv_threads(available_cores())
+        blas = [info["num_threads"] for info in threadpoolctl.threadpool_info() if info["user_api"] == "blas"]
+        assert all(count == 1 for count in blas)
+        with pipeline_threads():  # a nested run keeps the setting, and leaving it does not undo it
+            pass
+        assert cv2.getNumThreads() == opencv_threads(available_cores())
+    assert cv2.getNumThreads() == before
+    assert [info["num_threads"] for info in threadpoolctl.threadpool_info()
+            if info["user_api"] == "blas"] == blas_before
+
+
+def test_concurrent_runs_share_one_setting() -> None:
+    before = cv2.getNumThreads()
+    inside, leave = threading.Event(), threading.Event()
+
+    def other_run() -> None:
+        with pipeline_threads():
+            inside.set()
+            leave.wait(5)
+
+    worker = threading.Thread(target=other_run)
+    worker.start()
+    assert inside.wait(5)
+    with pipeline_threads():
+        pass  # this run leaves first: the other is still running, so nothing is put back yet
+    assert cv2.getNumThreads() == opencv_threads(available_cores())
+    leave.set()
+    worker.join(5)
+    assert cv2.getNumThreads() == before
+
+
+@pytest.mark.parametrize(("cores", "threads"), [(1, 1), (2, 1), (4, 2), (16, 14)])
+def test_opencv_gets_the_cores_the_pipeline_leaves(cores: int, threads: int) -> None:
+    assert opencv_threads(cores) == threads
