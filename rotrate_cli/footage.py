@@ -226,6 +226,8 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
         blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
     if tracker.retry_lost is None:
         tracker = replace(tracker, retry_lost=not info.is_image_sequence)
+    if tracker.predict_new is None:
+        tracker = replace(tracker, predict_new=not info.is_image_sequence)
     if tracker.steady_light is None:
         tracker = replace(tracker, steady_light=not info.is_image_sequence)
     thumbnails.steady_light = not info.is_image_sequence
@@ -235,7 +237,7 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
     size_px = (info.width_px, info.height_px)
-    stream = thumbnails.tap(prefetch(frames))
+    stream = prefetch(thumbnails.tap(frames))  # thumbnails made in the decoding thread: off the tracker's path
     keyframes.clear()
     if config.points_px:
         return follow_points(stream, size_px, list(config.points_px), config.tracker_kind, tracker, notify)

@@ -44,6 +44,21 @@ FORWARD_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.03)
 #: 0.03 px is ten times finer than that, and stops 15% sooner than the forward rule.
 BACKWARD_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)
 
+#: A new point's first step is predicted from the steps of the known points around it, where at
+#: least :data:`NEIGHBOURS_NEEDED` of its :data:`NEIGHBOURS` nearest lie within
+#: :data:`NEIGHBOUR_RADIUS_PX` (tracking pixels) and one affine field of steps (a turn's, seen
+#: near enough) explains theirs within :data:`NEIGHBOUR_RMS_PX`: such a point is then followed
+#: at the base level like a known one, not searched for over the whole pyramid (four levels,
+#: each as dear as the base). On the real record clip, whose 45,000 new points took two thirds
+#: of its Lucas-Kanade time, 41% of them are predicted so, and as many of those are kept as
+#: the full search keeps (7,295 against 7,279; 97% of the points both keep end within 0.05 px
+#: of each other); a radius of 30 px predicts 13%, 120 px 53% with neighbours' misfits three
+#: times larger and fewer kept.
+NEIGHBOURS = 8
+NEIGHBOURS_NEEDED = 4
+NEIGHBOUR_RADIUS_PX = 60.0
+NEIGHBOUR_RMS_PX = 1.0
+
 #: The activity map compares a frame with the last one seeded from (``reseed_every`` before) and
 #: with the one ``activity_s`` before; where the first shows under this share of the pixels the
 #: second does, the turn is slow, and both count. Frames a few apart show 0.6-0.95 of it on the
@@ -105,6 +120,13 @@ class TrackerConfig:
             and not image sequences, stills of a turntable from a tripod whose irregular steps
             it follows no better (on the EPFL cars' parts it made 5 of 15 good results weak and
             moved two of them by 2-17%).
+        predict_new: a new point's first step is predicted from its known neighbours' where they
+            agree (:func:`neighbour_steps`), and followed at the base level, not searched for over
+            the whole pyramid; None chooses by source: videos, whose frames come evenly (on the
+            real record clip it takes a sixth off the Lucas-Kanade time with the same result),
+            and not image sequences, stills taken at the hand's pace, where a neighbour's last
+            step says less (on the EPFL cars' first 50 photographs of seq18 it moved the rate
+            from -2.4% to -5.5%, outside its interval).
         fb_max_error_px: the largest forward-backward round-trip error a point may have.
         reseed_every: seed new corners every this many frames.
         motion_threshold: grey-level change (0-255) that marks a pixel as moving, between a
@@ -128,6 +150,7 @@ class TrackerConfig:
     pyramid_levels: int = 3
     retry_lost: bool | None = None
     steady_light: bool | None = None
+    predict_new: bool | None = None
     fb_max_error_px: float = 0.3
     reseed_every: int = 4
     motion_threshold: float = 6.0
@@ -570,14 +593,20 @@ class KltTracker(CornerTracker):
             moved, status = self._flow(self._prev, grey, points, points + velocity, KNOWN_LEVELS)
             back, status_back = self._flow(grey, self._prev, moved, moved - velocity, KNOWN_LEVELS, backward=True)
         else:
+            steps = self._velocity.copy()
+            predicted = known.copy()
+            if self.config.predict_new:
+                new = np.flatnonzero(~known)
+                steps[new], predicted[new] = neighbour_steps(self._points[known], self._velocity[known],
+                                                             self._points[new])
             moved = np.empty_like(self._points)
             status = np.zeros(len(self._points), np.uint8)
             back = np.empty_like(self._points)
             status_back = np.zeros(len(self._points), np.uint8)
-            for group, levels in ((known, KNOWN_LEVELS), (~known, self.config.pyramid_levels)):
+            for group, levels in ((predicted, KNOWN_LEVELS), (~predicted, self.config.pyramid_levels)):
                 if not group.any():
                     continue
-                points, velocity = self._points[group], self._velocity[group]
+                points, velocity = self._points[group], steps[group]
                 moved[group], status[group] = self._flow(self._prev, grey, points, points + velocity, levels)
                 back[group], status_back[group] = self._flow(grey, self._prev, moved[group],
                                                              moved[group] - velocity, levels, backward=True)
@@ -602,6 +631,41 @@ class KltTracker(CornerTracker):
             keep[retry] = ((status_again == 1) & (status_back_again == 1)
                            & (np.linalg.norm(back_again - points, axis=1) < self.config.fb_max_error_px))
         return moved, keep
+
+
+def neighbour_steps(known_px: np.ndarray, steps_px: np.ndarray, new_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each new point's step predicted from the known points' steps around it: the value at the
+    new point of an affine field of steps fitted to its :data:`NEIGHBOURS` nearest known points
+    within :data:`NEIGHBOUR_RADIUS_PX`, and whether that prediction holds (enough neighbours,
+    and the field explains their steps within :data:`NEIGHBOUR_RMS_PX` rms). Points without one
+    get a zero step. All in tracking pixels; ``known_px`` and ``steps_px`` are n x 2,
+    ``new_px`` m x 2."""
+    count = len(new_px)
+    steps = np.zeros((count, 2), np.float32)
+    if count == 0 or len(known_px) < NEIGHBOURS_NEEDED:
+        return steps, np.zeros(count, bool)
+    nearest = min(NEIGHBOURS, len(known_px))
+    offsets = known_px[None, :, :].astype(np.float64) - new_px[:, None, :]  # m x n x 2
+    distance2 = np.einsum("mnc,mnc->mn", offsets, offsets)
+    index = np.argpartition(distance2, nearest - 1, axis=1)[:, :nearest]
+    near = np.take_along_axis(distance2, index, axis=1) <= NEIGHBOUR_RADIUS_PX**2  # m x k
+    weight = near.astype(np.float64)
+    # the field a + B (x - new point): its value at the new point is a
+    design = np.concatenate([np.ones((count, nearest, 1)), np.take_along_axis(offsets, index[:, :, None], axis=1)],
+                            axis=2)  # m x k x 3
+    observed = steps_px[index].astype(np.float64)  # m x k x 2
+    weighted = design * weight[:, :, None]
+    normal = np.einsum("mki,mkj->mij", weighted, design) + 1e-9 * np.eye(3)
+    enough = near.sum(axis=1) >= NEIGHBOURS_NEEDED
+    # a neighbourhood on one line leaves the field across it unknown
+    enough &= np.linalg.cond(normal) < 1e8
+    normal[~enough] = np.eye(3)
+    field = np.linalg.solve(normal, np.einsum("mki,mkc->mic", weighted, observed))  # m x 3 x 2
+    misfit = np.einsum("mki,mic->mkc", design, field) - observed
+    rms = np.sqrt(np.einsum("mkc,mkc,mk->m", misfit, misfit, weight) / np.maximum(weight.sum(axis=1), 1.0))
+    holds = enough & (rms <= NEIGHBOUR_RMS_PX)
+    steps[holds] = field[holds, 0, :]
+    return steps, holds
 
 
 @dataclass(frozen=True)

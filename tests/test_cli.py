@@ -154,7 +154,11 @@ def test_python_dash_m_works_and_pipes_cleanly() -> None:
     )
     assert completed.returncode == 0, completed.stderr
     assert json.loads(completed.stdout)["omega"] > 0
-    assert completed.stderr == ""  # no progress bar when stderr is not a terminal
+    # no progress bar when stderr is not a terminal: only whole lines of warnings, if any (this
+    # 2-s part of the box clip sits on the edge of its sides' disagreement: 0.599 against 0.613
+    # rad/s, their intervals 0.0002 apart or overlapping by 0.0005 as one track comes or goes)
+    assert all(line.startswith("rotrate: warning: ") for line in completed.stderr.splitlines())
+    assert "\r" not in completed.stderr
 
 
 def test_debug_shows_the_traceback(tmp_path: Path) -> None:

@@ -8,7 +8,14 @@ import pytest
 
 from rotrate_cli.decode import Frame
 from rotrate_cli.synth import Renderer, SceneConfig
-from rotrate_cli.tracking import Roi, TrackerConfig, track_frames, tracking_image, tracking_scale
+from rotrate_cli.tracking import (
+    Roi,
+    TrackerConfig,
+    neighbour_steps,
+    track_frames,
+    tracking_image,
+    tracking_scale,
+)
 
 
 @pytest.fixture(scope="module")
@@ -162,3 +169,47 @@ def test_a_slow_turn_is_tracked(tmp_path, omega_rad_s: float, seed: int) -> None
     assert result.tracks_used >= 20  # 25 and 84 (0.03 and 0.05 rad/s)
     assert result.omega_low_rad_s <= omega_rad_s <= result.omega_high_rad_s
     assert result.omega_rad_s == pytest.approx(omega_rad_s, rel=0.15)
+
+
+def test_a_new_points_step_is_predicted_from_a_turn_seen_around_it() -> None:
+    rng = np.random.default_rng(3)
+    known = rng.uniform(100, 300, size=(200, 2)).astype(np.float32)
+    centre, turn = np.array([210.0, 190.0]), 0.06  # rad a frame, plus a drift of the whole picture
+    rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+
+    def step(points: np.ndarray) -> np.ndarray:
+        return ((points - centre) @ rotation.T + centre - points + [0.7, -0.4]).astype(np.float32)
+
+    inside = rng.uniform(150, 250, size=(20, 2)).astype(np.float32)
+    far = np.float32([[600, 600]])
+    steps, holds = neighbour_steps(known, step(known), np.vstack([inside, far]))
+    assert holds[:20].all() and not holds[20]
+    np.testing.assert_allclose(steps[:20], step(inside), atol=1e-3)
+    assert (steps[20] == 0).all()
+    # neighbours whose steps no one field explains (points of different bodies, mistracked
+    # points) say nothing about a new point's step
+    scattered = rng.normal(0, 3, size=known.shape).astype(np.float32)
+    assert not neighbour_steps(known, scattered, inside)[1].any()
+    # neighbours on one line leave the field across it unknown
+    line = np.stack([np.linspace(100, 300, 50), np.full(50, 200.0)], axis=1).astype(np.float32)
+    assert not neighbour_steps(line, step(line), np.float32([[200, 210]]))[1].any()
+    assert not neighbour_steps(known[:3], step(known[:3]), inside)[1].any()  # too few known points
+
+
+def test_predicted_new_points_are_followed_as_the_full_search_follows_them(sphere) -> None:
+    _, frames = sphere
+    searched = track_frames(frames, (320, 180), TrackerConfig(predict_new=False)).tracks
+    predicted = track_frames(frames, (320, 180), TrackerConfig(predict_new=True)).tracks
+    assert abs(predicted["track"].nunique() / searched["track"].nunique() - 1) < 0.1
+    # the same corners seeded in the same frames, followed to the same places
+    starts = ["frame", "x0", "y0"]
+    first = {name: table.groupby("track").first().rename(columns={"x_px": "x0", "y_px": "y0"}).round(3)
+             for name, table in (("searched", searched), ("predicted", predicted))}
+    pairs = first["searched"].reset_index().merge(first["predicted"].reset_index(), on=starts,
+                                                  suffixes=("_s", "_p"))
+    assert len(pairs) > 0.8 * len(first["searched"])
+    match = pairs[["track_s", "track_p"]].rename(columns={"track_s": "track", "track_p": "twin"})
+    joined = searched.merge(match, on="track").merge(
+        predicted.rename(columns={"track": "twin"}), on=["twin", "frame"], suffixes=("_s", "_p"))
+    gap_px = np.hypot(joined["x_px_s"] - joined["x_px_p"], joined["y_px_s"] - joined["y_px_p"])
+    assert (gap_px < 0.05).mean() > 0.95
