@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -32,6 +31,7 @@ import cv2
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from rotrate_cli.pools import available_cores  # noqa: E402
 from rotrate_cli.synth import Renderer, SceneConfig  # noqa: E402
 
 OUT = ROOT / "bench_out"
@@ -175,7 +175,7 @@ def main() -> int:
     if args.long:
         return long_clips()
     clips = make_clips()
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    cores = available_cores()
     print("rotrate benchmark: side by side in one run, medians; ratio = analyze time / decode-only time")
     print(f"CPU floor = analyze's processor time (all its threads) shared over this machine's {cores} cores, "
           "over the decode-only time: the ratio no scheduling of the same work could beat")

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import glob
 import math
-import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
@@ -21,6 +20,7 @@ from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze
 from rotrate_cli.errors import InputError, NoResultError, RotrateError
 from rotrate_cli.focal import parse_fov
 from rotrate_cli.lazy import pandas as pd
+from rotrate_cli.pools import available_cores
 
 VIDEO_SUFFIXES = frozenset({".mp4", ".mov", ".avi", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"})
 SUMMARY_COLUMNS = ("file", "status", "omega", "omega_low", "omega_high", "rpm", "direction", "tracks_used",
@@ -162,7 +162,7 @@ def run_batch(
             if done is not None:
                 done(outcomes[-1])
         return outcomes
-    with ProcessPoolExecutor(max_workers=min(workers, len(jobs), os.cpu_count() or workers)) as pool:
+    with ProcessPoolExecutor(max_workers=min(workers, len(jobs), available_cores())) as pool:
         for outcome in pool.map(run_one, jobs):
             outcomes.append(outcome)
             if done is not None:
