@@ -9,6 +9,10 @@ import pytest
 from rotrate_cli.decode import Frame
 from rotrate_cli.synth import Renderer, SceneConfig
 from rotrate_cli.tracking import (
+    NEIGHBOUR_RADIUS_PX,
+    NEIGHBOUR_RMS_PX,
+    NEIGHBOURS,
+    NEIGHBOURS_NEEDED,
     Roi,
     TrackerConfig,
     neighbour_steps,
@@ -194,6 +198,27 @@ def test_a_new_points_step_is_predicted_from_a_turn_seen_around_it() -> None:
     line = np.stack([np.linspace(100, 300, 50), np.full(50, 200.0)], axis=1).astype(np.float32)
     assert not neighbour_steps(line, step(line), np.float32([[200, 210]]))[1].any()
     assert not neighbour_steps(known[:3], step(known[:3]), inside)[1].any()  # too few known points
+
+
+def test_a_predicted_step_is_the_least_squares_field_of_its_nearest_neighbours() -> None:
+    # noisy steps, where the closed form and a plain least-squares solve could part ways
+    rng = np.random.default_rng(11)
+    known = rng.uniform(0, 400, size=(150, 2)).astype(np.float32)
+    steps_px = (known @ np.float32([[0.01, -0.02], [0.03, 0.005]]) + rng.normal(0, 0.4, known.shape) + [1.5, -2.0])
+    steps_px = steps_px.astype(np.float32)
+    new = rng.uniform(20, 380, size=(40, 2)).astype(np.float32)
+    steps, holds = neighbour_steps(known, steps_px, new)
+    assert holds.sum() >= 30
+    for point, predicted, held in zip(new, steps, holds, strict=True):
+        distance = np.hypot(*(known - point).T)
+        nearest = np.argsort(distance)[:NEIGHBOURS]
+        nearest = nearest[distance[nearest] <= NEIGHBOUR_RADIUS_PX]
+        design = np.column_stack([np.ones(len(nearest)), known[nearest] - point])
+        field, *_ = np.linalg.lstsq(design, steps_px[nearest].astype(np.float64), rcond=None)
+        rms = np.sqrt(np.mean(np.sum((design @ field - steps_px[nearest]) ** 2, axis=1)))
+        assert held == (len(nearest) >= NEIGHBOURS_NEEDED and rms <= NEIGHBOUR_RMS_PX)
+        if held:
+            np.testing.assert_allclose(predicted, field[0], atol=1e-4)
 
 
 def test_predicted_new_points_are_followed_as_the_full_search_follows_them(sphere) -> None:
