@@ -110,7 +110,6 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     if run.tracks.empty and thumbnails.lifeless_fraction() >= LIFELESS and video.use_ffmpeg():
         # OpenCV's trouble with interlaced streams: black frames, or one frozen garbled picture;
         # it strikes some openings of a file and not others, so it is caught here too
-        thumbnails.clear()
         run = _track(video, config, tracker, progress, thumbnails, keyframes)
     _check_tracked(run, thumbnails, source)
     shot = None if config.points_px else longest_shot(thumbnails.times_s, thumbnails.images, thumbnails.levels)
@@ -118,7 +117,6 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         # the clip cuts: tracks do not cross a cut, and the repetition is another scene's too
         last = shot.last == len(thumbnails.times_s) - 1  # to the clip's end (thumbnails stop at a long clip's)
         config = replace(config, start_s=shot.start_s, end_s=config.end_s if last else shot.end_s)
-        thumbnails.clear()
         run = _track(video, config, tracker, progress, thumbnails, keyframes)
         _check_tracked(run, thumbnails, source)
     tracks = by_track(run.tracks)
@@ -127,7 +125,6 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     if shaken is not None:
         # a hand-held camera: track again knowing its motion, so that the still background is let
         # go of as on a tripod and the points go to the body; the positions as a still camera saw them
-        thumbnails.clear()
         run = _track(video, config, tracker, progress, thumbnails, keyframes, shaken[0])
         tracks = shaken[0].steady(by_track(run.tracks))
     angle = config.axis_angle_deg if config.axis_angle_deg is not None else math.nan
@@ -135,7 +132,6 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         angle = axes.motion_angle_deg(tracks)
         if across(angle):
             # the motion runs up and down the image: track again with the window turned to suit it
-            thumbnails.clear()
             camera = None if shaken is None else shaken[0]
             run = _track(video, config, turned(tracker), progress, thumbnails, keyframes, camera)
             if run.tracks.empty:
@@ -218,7 +214,8 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
            camera: CameraPath | None = None) -> TrackingRun:
     """Decode (in a background thread) and track the frames of ``video`` between start and end,
     keeping a thumbnail of each in ``thumbnails`` and some of the tracker's images in
-    ``keyframes`` (emptied first); ``camera``: its own motion, where known."""
+    ``keyframes`` (both emptied first: a run again replaces the last); ``camera``: its own motion,
+    where known."""
     info = video.info
     scale = tracking_scale(info.width_px, tracker)
     blur = tracker.blur_sigma_px
@@ -237,6 +234,7 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
     size_px = (info.width_px, info.height_px)
+    thumbnails.clear()
     stream = prefetch(thumbnails.tap(frames))  # thumbnails made in the decoding thread: off the tracker's path
     keyframes.clear()
     if config.points_px:
