@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -208,21 +209,25 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     size_px = (footage.info.width_px, footage.info.height_px)
     if config.segment:
         return _segmented(footage, config)
-    period = _repetition(footage, config)
+    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="rotrate-repetition") as pool:
+        # the clip's repetition (from the thumbnails alone) is worked out beside the axis's search,
+        # on the core the tracker's decoding thread has left: it is first wanted to choose the lens
+        repetition = pool.submit(_repetition, footage, config)
+        kept = _kept_tracks(tracks, footage.camera) if config.keep_tracks else None
+        view_tracks = keep_for_view(tracks)  # the view is read at the rate reported, once it is known
+        places = track_places(tracks)  # where each track lies: to name why the rejected were
+        try:
+            # a rate from the repetition needs no lens
+            geometry, body = locate(tracks, footage.motion_angle_deg, config, footage.info,
+                                    seek_lens=lambda: repetition.result() is None, keyframes=footage.keyframes)
+        except NoResultError:
+            if repetition.result() is None:
+                raise
+            return _repetition_only(footage, repetition.result(), config, kept, view_tracks)
+        finally:
+            footage.keyframes.clear()
+        period = repetition.result()
     footage.thumbnails.clear()
-    if period is not None:
-        footage.keyframes.clear()  # a rate from the repetition needs no lens: its images are not wanted
-    kept = _kept_tracks(tracks, footage.camera) if config.keep_tracks else None
-    view_tracks = keep_for_view(tracks)  # the view is read at the rate reported, once it is known
-    places = track_places(tracks)  # where each track lies: to name why the rejected were
-    try:
-        geometry, body = locate(tracks, footage.motion_angle_deg, config, footage.info, seek_lens=period is None,
-                                keyframes=footage.keyframes)
-    except NoResultError:
-        if period is None:
-            raise
-        return _repetition_only(footage, period, config, kept, view_tracks)
-    footage.keyframes.clear()
     footage = replace(footage, tracks=tracks.iloc[:0])
     del tracks  # the offsets hold what is needed: a long clip's positions need not stay
     release_free_memory()

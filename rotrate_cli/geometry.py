@@ -177,11 +177,12 @@ def looks_down(tracks: pd.DataFrame) -> bool:
 
 
 def locate(tracks: pd.DataFrame, motion_angle_deg: float, config: AnalysisConfig, info: VideoInfo,
-           seek_lens: bool, keyframes: Keyframes | None = None) -> tuple[Geometry, PreparedBody]:
+           seek_lens: bool | Callable[[], bool], keyframes: Keyframes | None = None) -> tuple[Geometry, PreparedBody]:
     """Step 1 (see the module's notes). ``tracks``: ``frame, time_s, track, x_px, y_px`` of one
     body, sorted by track then frame; the caller may let them go afterwards. ``seek_lens``: find
     the lens from the tracks where none is given or read (it costs seconds at 720p, and a rate
-    from the clip's repetition needs no camera); ``keyframes``: the tracker's images kept, on which
+    from the clip's repetition needs no camera), or a function that says so, asked once the axis
+    is found (a caller may work the answer out meanwhile); ``keyframes``: the tracker's images kept, on which
     the lens's fit places its samples again.
 
     Raises:
@@ -192,8 +193,8 @@ def locate(tracks: pd.DataFrame, motion_angle_deg: float, config: AnalysisConfig
     paths_elevation = elevation if angle_from == "paths" else math.nan
     fixation = _first_fixation(tracks, angle, config)
     size_px = (info.width_px, info.height_px)
-    if (seek_lens and lens.source == "orthographic" and config.find_focal and config.method == "fit"
-            and not config.points_px):
+    if (lens.source == "orthographic" and config.find_focal and config.method == "fit" and not config.points_px
+            and (seek_lens() if callable(seek_lens) else seek_lens)):
         # the paths' elevation reads their ellipses as seen from far away: it only starts the lens's
         # fit, which finds the elevation with the perspective
         lens = find_lens(tracks, fixation, angle, lens, size_px, paths_elevation, keyframes)

@@ -377,3 +377,29 @@ def test_the_geometry_stage_is_one_typed_result() -> None:
     assert geometry.lens.source == "found" and geometry.fixation_found
     geometry, _ = measure(body, geometry, found, size)
     assert geometry.fixation_px[0] == pytest.approx(truth["fixation_px"][0], abs=3.0)
+
+
+def test_the_lens_question_is_asked_only_where_a_lens_is_sought() -> None:
+    """``locate`` takes the question "seek the lens?" as a function (the analysis works the
+    answer, the clip's repetition, out beside the axis's search): asked once, after the axis
+    is found, and only where the lens is not given; its answer is obeyed."""
+    from rotrate_cli.footage import read_footage
+    from rotrate_cli.geometry import locate
+
+    asked: list[bool] = []
+
+    def answer(value: bool):
+        def ask() -> bool:
+            asked.append(value)
+            return value
+        return ask
+
+    given = AnalysisConfig(fixation_px=None, fov_deg=25.0)
+    footage = read_footage(SAMPLES / "box_perspective.mp4", given)
+    geometry, _ = locate(footage.tracks, footage.motion_angle_deg, given, footage.info, seek_lens=answer(True))
+    assert asked == [] and geometry.lens.source == "given"
+    found = AnalysisConfig(fixation_px=None)
+    geometry, _ = locate(footage.tracks, footage.motion_angle_deg, found, footage.info, seek_lens=answer(False))
+    assert asked == [False] and geometry.lens.source == "orthographic"
+    geometry, _ = locate(footage.tracks, footage.motion_angle_deg, found, footage.info, seek_lens=answer(True))
+    assert asked == [False, True] and geometry.lens.source == "found"
