@@ -211,7 +211,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         return _segmented(footage, config)
     with ThreadPoolExecutor(max_workers=1, thread_name_prefix="rotrate-repetition") as pool:
         # the clip's repetition (from the thumbnails alone) is worked out beside the axis's search,
-        # on the core the tracker's decoding thread has left: it is first wanted to choose the lens
+        # on the core that decoding left idle: it is first wanted where the lens is chosen
         repetition = pool.submit(_repetition, footage, config)
         kept = _kept_tracks(tracks, footage.camera) if config.keep_tracks else None
         view_tracks = keep_for_view(tracks)  # the view is read at the rate reported, once it is known
