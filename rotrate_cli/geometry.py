@@ -182,8 +182,8 @@ def locate(tracks: pd.DataFrame, motion_angle_deg: float, config: AnalysisConfig
     body, sorted by track then frame; the caller may let them go afterwards. ``seek_lens``: find
     the lens from the tracks where none is given or read (it costs seconds at 720p, and a rate
     from the clip's repetition needs no camera), or a function that says so, asked once the axis
-    is found (a caller may work the answer out meanwhile); ``keyframes``: the tracker's images kept, on which
-    the lens's fit places its samples again.
+    is found (a caller may work the answer out meanwhile); ``keyframes``: the tracker's images
+    kept, on which the lens's fit places its samples again.
 
     Raises:
         NoResultError: the axis cannot be found from the tracks.
