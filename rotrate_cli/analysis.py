@@ -48,6 +48,7 @@ from rotrate_cli.pools import pipeline_threads
 from rotrate_cli.rates import Camera
 from rotrate_cli.reasons import name_rejections, track_places
 from rotrate_cli.segment import Body
+from rotrate_cli.sense import sense_of_turning
 from rotrate_cli.series import rate_series
 from rotrate_cli.steady import CameraPath, Shake
 from rotrate_cli.verdict import Verdict, judge, turns_between
@@ -74,7 +75,8 @@ class Analysis:
         fixation_px: the fixation point (x, y); y is NaN where only x is known (track files).
         method: the estimator used.
         omega_rad_s, omega_low_rad_s, omega_high_rad_s: combined rate and its 95% interval, rad/s.
-        direction: ``ccw``, ``cw`` or ``unknown`` (seen from the top end of the axis).
+        direction: ``ccw``, ``cw`` or ``unknown``: seen from the top end of the axis, or as the
+            picture shows it (``direction_in_picture``).
         tracks_total, tracks_used: tracks found, and tracks that went into the result.
         features: one row per track (see :data:`rotrate_cli.outliers.FEATURE_COLUMNS`).
         offsets: one row per track per sample: ``track, frame, time_s, offset_px``.
@@ -109,6 +111,8 @@ class Analysis:
             (orthographic).
         shake: a hand-held camera's shake, taken out of the tracks (:mod:`rotrate_cli.steady`);
             None where none showed.
+        direction_in_picture: True when the sense of turning is the one the tracks go round the
+            fixation in the picture (a view from above or face on: :mod:`rotrate_cli.sense`).
 
     ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
     a long clip's table is large, and most reports do not need it.
@@ -147,6 +151,7 @@ class Analysis:
     view: View | None = None
     camera: Camera | None = None
     shake: Shake | None = None
+    direction_in_picture: bool = False
 
     @property
     def quality(self) -> str:
@@ -285,8 +290,11 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         period = turns_between(period, tracks_rate, combined.tracks_used)
     verdict = judge(tracks_rate, period, combined.tracks_used, checked.doubts)
     size_px = (footage.info.width_px, footage.info.height_px)
+    direction, in_picture = result.direction, False
     if view_tracks is not None:
         geometry = settle_view(geometry, view_tracks, verdict.omega_rad_s, verdict.rate_from, size_px)
+        direction, in_picture = sense_of_turning(direction, geometry.view, view_tracks, geometry.fixation_px,
+                                                 verdict.omega_rad_s)
     warnings = footage.warnings + geometry.notes + notes + checked.notes + verdict.notes
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
@@ -298,7 +306,7 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         source=footage.info.source, fps=footage.info.fps, frames=footage.frames, duration_s=footage.duration_s,
         fixation_px=geometry.fixation_px,
         omega_rad_s=verdict.omega_rad_s, omega_low_rad_s=verdict.omega_low_rad_s,
-        omega_high_rad_s=verdict.omega_high_rad_s, direction=result.direction,
+        omega_high_rad_s=verdict.omega_high_rad_s, direction=direction, direction_in_picture=in_picture,
         tracks_total=int(len(result.features)), tracks_used=combined.tracks_used, features=result.features,
         offsets=result.offsets, rejection=config.rejection, warnings=warnings,
         axis_angle_deg=float(geometry.axis_angle_deg), axis_found=geometry.fixation_found,

@@ -160,6 +160,7 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "background_tracks": analysis.shake.background_tracks,
         },
         "direction": analysis.direction,
+        "direction_seen": _direction_seen(analysis),
         "tracks_total": analysis.tracks_total,
         "tracks_used": analysis.tracks_used,
         "rejected": dict(sorted(reasons.items())),
@@ -212,7 +213,8 @@ def render_table(analysis: Analysis, console: Console) -> None:
     summary.add_row("95% interval", f"{interval} rad/s")
     summary.add_row("quality", analysis.quality)
     summary.add_row("rate from", _rate_from_text(analysis))
-    summary.add_row("direction", analysis.direction)
+    summary.add_row("direction", analysis.direction + ("" if analysis.direction == "unknown"
+                                                       else f"  (seen {_direction_seen(analysis)})"))
     fx, fy = analysis.fixation_px
     summary.add_row("fixation", f"{fx:.1f}" + ("" if math.isnan(fy) else f", {fy:.1f}")
                     + (f" {analysis.position_unit}" if math.isnan(fy) else " px")
@@ -353,3 +355,10 @@ def junit_xml(outcomes: list[Outcome], expected: list[tuple[float, float]], suit
             ET.SubElement(case, "error", message=outcome.error, type=outcome.status)
     ET.indent(root)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _direction_seen(analysis: Analysis) -> str:
+    """Where the reported sense of turning is seen from."""
+    if analysis.direction_in_picture:
+        return "as the picture shows it"
+    return "from the axis's top end"

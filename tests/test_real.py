@@ -162,3 +162,54 @@ def test_record_whose_spindle_is_outside_the_picture(tmp_path: Path) -> None:
     assert analysis.fixation_px[0] > 1000  # outside the picture
     assert math.dist(analysis.fixation_px, truth["fixation"]) < 60
     assert any("lies outside the 1000x720 frame" in warning for warning in analysis.warnings)
+
+
+def _wheel_turned(clip: Path, out: Path, turn: int | None, flip: bool) -> Path:
+    """The wheel's clip with every frame rotated by ``turn`` (an OpenCV rotate code) and/or
+    mirrored left to right."""
+    import cv2
+
+    reader = cv2.VideoCapture(str(clip))
+    writer = None
+    while True:
+        ok, frame = reader.read()
+        if not ok:
+            break
+        frame = cv2.rotate(frame, turn) if turn is not None else frame
+        frame = cv2.flip(frame, 1) if flip else frame
+        if writer is None:
+            writer = cv2.VideoWriter(str(out), cv2.VideoWriter_fourcc(*"mp4v"), reader.get(cv2.CAP_PROP_FPS),
+                                     (frame.shape[1], frame.shape[0]))
+        writer.write(frame)
+    assert writer is not None
+    writer.release()
+    return out
+
+
+def test_the_face_on_wheel_turns_the_way_its_sticker_does_however_the_picture_is_held(tmp_path: Path) -> None:
+    """Face on, the sense is the one the wheel goes round in the picture. Its hand-tracked rim
+    sticker goes round the axle anticlockwise on the screen (its angle, y down, falls). The side
+    view's rule (which way the near side travels) read the clip turned upside down the other way:
+    it told only how the picture was held. Mirrored, the sense must change."""
+    clip = VIDEOS / "bicycle_wheel_frontal.mp4"
+    need(clip, "the bicycle wheel video")
+    sticker = np.loadtxt(clip.with_suffix(".track.csv"), delimiter=",", skiprows=1)
+    assert sticker[-1, 3] < sticker[0, 3]  # anticlockwise on the screen
+    import cv2
+
+    for turn, flip, expected in ((None, False, "ccw"), (cv2.ROTATE_180, False, "ccw"), (None, True, "cw")):
+        source = clip if turn is None and not flip else _wheel_turned(clip, tmp_path / f"wheel_{turn}_{flip}.mp4",
+                                                                      turn, flip)
+        analysis = analyze(source, AnalysisConfig(fixation_px=None))
+        assert analysis.direction == expected, (turn, flip)
+        assert analysis.direction_in_picture
+        assert analysis.omega_rad_s == pytest.approx(2.27298, rel=0.02)
+
+
+def test_the_record_turns_clockwise_seen_from_above() -> None:
+    """A record player turns clockwise seen from above, as this camera sees it. Before the sense
+    was read from the picture, the side view's rule could not tell (unknown)."""
+    clip = VIDEOS / "record_oblique_closeup.mp4"
+    need(clip, "the record video")
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None))
+    assert analysis.direction == "cw" and analysis.direction_in_picture
