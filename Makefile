@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow test-floor lint bench bench-memory bench-real bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
+.PHONY: demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -50,6 +50,10 @@ bench-memory: $(STAMP)
 ## bench-real: real footage with known truth (../shared/data), default settings: error, interval, coverage, sense
 bench-real: $(STAMP)
 	$(BIN)/python benchmarks/bench_real.py
+
+## bench-variants: the real videos mirrored, turned, shrunk, thinned, reversed, noisy and cropped (written once to bench_out/variants): rate, interval and sense of turning, default settings (about a minute)
+bench-variants: $(STAMP)
+	$(BIN)/python benchmarks/bench_variants.py
 
 ## bench-accuracy: the paper's method vs ours on 17 rendered conditions with known rates, no lens given (renders cached)
 bench-accuracy: $(STAMP)

@@ -1,0 +1,152 @@
+"""The real videos (../shared/data/real_videos) transformed as other people's footage differs:
+mirrored, turned a quarter and a half turn, at 0.6, 0.5 and 0.25 of their size, every second
+frame (at half the frame rate), played backwards, blurred with noise added, and cropped. Each
+copy has the clip's own rate in rad/s; mirrored or backwards, the other sense of turning.
+Default settings, ``--fixation auto``.
+
+    python benchmarks/bench_variants.py             # every copy of both clips
+    python benchmarks/bench_variants.py --only wheel
+
+The senses: the wheel goes round anticlockwise on the screen (its hand-tracked rim sticker's
+angle falls, y down), the record clockwise (a record player turns clockwise seen from above, as
+this camera sees it). The copies are written once to bench_out/variants (MPEG-4).
+
+Exits 1 when a copy is off by more than 5% without being marked weak, its interval misses the
+truth, or its sense is told wrong ("unknown" is not wrong); 0 otherwise; skips (exit 0) where
+../shared/data is absent.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from rotrate_cli.analysis import AnalysisConfig, analyze
+from rotrate_cli.errors import RotrateError
+
+ROOT = Path(__file__).resolve().parent.parent
+VIDEOS = ROOT.parent / "shared" / "data" / "real_videos"
+OUT = ROOT / "bench_out" / "variants"
+UNMARKED_LIMIT = 0.05
+#: each clip's sense of turning as the picture shows it (see the module's notes)
+SENSE = {"bicycle_wheel_frontal": "ccw", "record_oblique_closeup": "cw"}
+
+Frames = Iterable[np.ndarray]
+
+
+def _scaled(factor: float) -> Callable[[Frames], Iterator[np.ndarray]]:
+    return lambda frames: (cv2.resize(f, None, fx=factor, fy=factor, interpolation=cv2.INTER_AREA) for f in frames)
+
+
+def _noisy(frames: Frames) -> Iterator[np.ndarray]:
+    rng = np.random.default_rng(1)
+    for frame in frames:
+        blurred = cv2.GaussianBlur(frame, (5, 5), 1.2).astype(np.int16)
+        yield np.clip(blurred + rng.normal(0.0, 6.0, frame.shape).astype(np.int16), 0, 255).astype(np.uint8)
+
+
+#: name: (the frames transformed, the frame rate's factor, the sense kept (+1) or turned (-1))
+VARIANTS: dict[str, tuple[Callable[[Frames], Iterable[np.ndarray]], float, int]] = {
+    "mirrored": (lambda frames: (cv2.flip(f, 1) for f in frames), 1.0, -1),
+    "quarter turn": (lambda frames: (cv2.rotate(f, cv2.ROTATE_90_CLOCKWISE) for f in frames), 1.0, 1),
+    "upside down": (lambda frames: (cv2.rotate(f, cv2.ROTATE_180) for f in frames), 1.0, 1),
+    "0.6 size": (_scaled(0.6), 1.0, 1),
+    "half size": (_scaled(0.5), 1.0, 1),
+    "quarter size": (_scaled(0.25), 1.0, 1),
+    "every 2nd frame": (lambda frames: (f for i, f in enumerate(frames) if i % 2 == 0), 0.5, 1),
+    "backwards (half size)": (lambda frames: reversed(list(_scaled(0.5)(frames))), 1.0, -1),
+    "blurred, noise 6": (_noisy, 1.0, 1),
+    "left quarter cut": (lambda frames: (f[:, f.shape[1] // 4:] for f in frames), 1.0, 1),
+    "top fifth cut": (lambda frames: (f[f.shape[0] // 5:] for f in frames), 1.0, 1),
+}
+
+
+def _frames(clip: Path) -> Iterator[np.ndarray]:
+    reader = cv2.VideoCapture(str(clip))
+    try:
+        while True:
+            ok, frame = reader.read()
+            if not ok:
+                return
+            yield frame
+    finally:
+        reader.release()
+
+
+def _written(clip: Path, name: str, fps: float) -> Path:
+    """The transformed copy, written once."""
+    transform, fps_factor, _ = VARIANTS[name]
+    path = OUT / f"{clip.stem}_{name.replace(' ', '_').replace(',', '').replace('(', '').replace(')', '')}.mp4"
+    if path.exists():
+        return path
+    OUT.mkdir(parents=True, exist_ok=True)
+    partial = path.with_suffix(".partial.mp4")
+    writer = None
+    for frame in transform(_frames(clip)):
+        if writer is None:
+            writer = cv2.VideoWriter(str(partial), cv2.VideoWriter_fourcc(*"mp4v"), fps * fps_factor,
+                                     (frame.shape[1], frame.shape[0]))
+        writer.write(frame)
+    if writer is None:
+        raise RuntimeError(f"{clip} gave no frames")
+    writer.release()
+    partial.replace(path)
+    return path
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", default="", help="run only the clips or copies whose name contains this")
+    options = parser.parse_args()
+    if not VIDEOS.exists():
+        print(f"skipped: {VIDEOS} is absent (the real footage lives in the workplace's shared folder)")
+        return 0
+    header = (f"{'clip':<24} {'copy':<22} {'omega':>8} {'error':>8} {'95% interval (error)':>22} {'covers':>6} "
+              f"{'sense':>8} {'quality':>7} {'from':>10} {'s':>5}")
+    print(header)
+    print("-" * len(header))
+    cases = failed = wrong_sense = unknown_sense = 0
+    for stem, sense in SENSE.items():
+        clip = VIDEOS / f"{stem}.mp4"
+        truth = json.loads(clip.with_suffix(".truth.json").read_text())
+        for name in ("as it is", *VARIANTS):
+            if options.only and options.only not in f"{stem} {name}":
+                continue
+            cases += 1
+            source = clip if name == "as it is" else _written(clip, name, truth["fps"])
+            flips = name != "as it is" and VARIANTS[name][2] < 0
+            expected = {"cw": "ccw", "ccw": "cw"}[sense] if flips else sense
+            started = time.perf_counter()
+            try:
+                analysis = analyze(source, AnalysisConfig(fixation_px=None))
+            except RotrateError as error:
+                print(f"{stem:<24} {name:<22} {'-':>8} {'-':>8} {'no result':>22}   {error}")
+                failed += 1
+                continue
+            error = analysis.omega_rad_s / truth["omega"] - 1.0
+            low = analysis.omega_low_rad_s / truth["omega"] - 1.0
+            high = analysis.omega_high_rad_s / truth["omega"] - 1.0
+            covers = low <= 0.0 <= high
+            told = analysis.direction
+            verdict = "right" if told == expected else ("unknown" if told == "unknown" else "WRONG")
+            wrong_sense += verdict == "WRONG"
+            unknown_sense += verdict == "unknown"
+            failed += (not covers) or (abs(error) > UNMARKED_LIMIT and analysis.quality != "weak") or verdict == "WRONG"
+            print(f"{stem:<24} {name:<22} {analysis.omega_rad_s:>8.4f} {100 * error:>+7.2f}% "
+                  f"{f'[{100 * low:+.2f}%, {100 * high:+.2f}%]':>22} {'yes' if covers else 'NO':>6} {verdict:>8} "
+                  f"{analysis.quality:>7} {analysis.rate_from:>10} {time.perf_counter() - started:>5.1f}")
+    print(f"\ncopies and clips {cases}; failed {failed} (no result, interval missing the truth, off by more than "
+          f"{100 * UNMARKED_LIMIT:.0f}% unmarked, or the sense wrong); sense wrong {wrong_sense}, "
+          f"unknown {unknown_sense}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
