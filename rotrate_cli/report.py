@@ -214,7 +214,7 @@ def render_table(analysis: Analysis, console: Console) -> None:
     summary.add_row("quality", analysis.quality)
     summary.add_row("rate from", _rate_from_text(analysis))
     summary.add_row("direction", analysis.direction + ("" if analysis.direction == "unknown"
-                                                       else f"  (seen {_direction_seen(analysis)})"))
+                                                       else f"  ({_direction_seen(analysis)})"))
     fx, fy = analysis.fixation_px
     summary.add_row("fixation", f"{fx:.1f}" + ("" if math.isnan(fy) else f", {fy:.1f}")
                     + (f" {analysis.position_unit}" if math.isnan(fy) else " px")
@@ -360,5 +360,5 @@ def junit_xml(outcomes: list[Outcome], expected: list[tuple[float, float]], suit
 def _direction_seen(analysis: Analysis) -> str:
     """Where the reported sense of turning is seen from."""
     if analysis.direction_in_picture:
-        return "as the picture shows it"
-    return "from the axis's top end"
+        return "as seen in the picture"
+    return "seen from the axis's top end"
