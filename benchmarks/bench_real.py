@@ -18,7 +18,6 @@ Exits 1 when a target is missed, 0 otherwise; skips (exit 0) where ../shared/dat
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
@@ -26,8 +25,11 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from rotrate_cli.analysis import AnalysisConfig, analyze
-from rotrate_cli.errors import RotrateError
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from benchmarks.scoring import footage_absent, only_option  # noqa: E402
+from rotrate_cli.analysis import AnalysisConfig, analyze  # noqa: E402
+from rotrate_cli.errors import RotrateError  # noqa: E402
 
 DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "data"
 COVERAGE_TARGET = 0.90
@@ -123,20 +125,17 @@ def _axis_off(case: Case, analysis) -> str:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--only", default="", help="run only the cases whose name contains this")
-    options = parser.parse_args()
-    if not DATA.exists():
-        print(f"skipped: {DATA} is absent (the real footage lives in the workplace's shared folder)")
+    only = only_option(__doc__.splitlines()[0], "cases")
+    if footage_absent(DATA):
         return 0
-    chosen = [case for case in cases() if options.only in case.name]
+    chosen = [case for case in cases() if only in case.name]
     covered, missed, unmarked = _table(chosen)
     total = len(chosen)
     coverage = covered / total if total else 1.0
     print(f"\ncases {total}; within bounds {total - missed}; intervals covering the truth {covered} "
           f"({100 * coverage:.0f}%, target {100 * COVERAGE_TARGET:.0f}%); off by more than "
           f"{100 * UNMARKED_LIMIT:.0f}% and not marked weak: {unmarked}")
-    pieces = [case for case in parts() if options.only in case.name]
+    pieces = [case for case in parts() if only in case.name]
     print("\nparts of the clips (most shorter than a turn: the tracks alone, or a single return of the picture)")
     part_covered, _, part_unmarked = _table(pieces)
     print(f"\nparts {len(pieces)}; intervals covering the truth {part_covered}; off by more than "

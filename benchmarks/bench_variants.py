@@ -18,7 +18,6 @@ truth, or its sense is told wrong ("unknown" is not wrong); 0 otherwise; skips (
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -28,8 +27,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from rotrate_cli.analysis import AnalysisConfig, analyze
-from rotrate_cli.errors import RotrateError
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from benchmarks.scoring import footage_absent, only_option  # noqa: E402
+from rotrate_cli.analysis import AnalysisConfig, analyze  # noqa: E402
+from rotrate_cli.errors import RotrateError  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 VIDEOS = ROOT.parent / "shared" / "data" / "real_videos"
@@ -102,11 +104,8 @@ def _written(clip: Path, name: str, fps: float) -> Path:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--only", default="", help="run only the clips or copies whose name contains this")
-    options = parser.parse_args()
-    if not VIDEOS.exists():
-        print(f"skipped: {VIDEOS} is absent (the real footage lives in the workplace's shared folder)")
+    only = only_option(__doc__.splitlines()[0], "clips or copies")
+    if footage_absent(VIDEOS):
         return 0
     header = (f"{'clip':<24} {'copy':<22} {'omega':>8} {'error':>8} {'95% interval (error)':>22} {'covers':>6} "
               f"{'sense':>8} {'quality':>7} {'from':>10} {'s':>5}")
@@ -117,7 +116,7 @@ def main() -> int:
         clip = VIDEOS / f"{stem}.mp4"
         truth = json.loads(clip.with_suffix(".truth.json").read_text())
         for name in ("as it is", *VARIANTS):
-            if options.only and options.only not in f"{stem} {name}":
+            if only and only not in f"{stem} {name}":
                 continue
             cases += 1
             source = clip if name == "as it is" else _written(clip, name, truth["fps"])

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import argparse
 import math
 from pathlib import Path
 
@@ -11,6 +12,21 @@ from rotrate_cli.errors import RotrateError
 
 #: Errors above this, as a fraction, must come with ``weak``.
 UNMARKED_LIMIT = 0.05
+
+
+def only_option(description: str, what: str) -> str:
+    """A benchmark's ``--only`` filter, from its command line."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--only", default="", help=f"run only the {what} whose name contains this")
+    return str(parser.parse_args().only)
+
+
+def footage_absent(folder: Path) -> bool:
+    """True, having said so, where the real footage (the workplace's shared folder) is absent."""
+    if folder.exists():
+        return False
+    print(f"skipped: {folder} is absent (the real footage lives in the workplace's shared folder)")
+    return True
 
 
 def scored(path: Path, truth: dict) -> dict[str, object]:
