@@ -40,6 +40,8 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 T = TypeVar("T")
+#: The names --overlay writes a video under (none: .mp4).
+OVERLAY_SUFFIXES = ("", ".mp4", ".mov", ".mkv", ".avi")
 
 
 def _print_version(value: bool) -> None:
@@ -335,6 +337,10 @@ def analyze_command(
         for picture in (overlay, plot):
             if picture is not None:
                 check_output_path(picture, force)
+        if overlay is not None and overlay.suffix.lower() not in OVERLAY_SUFFIXES:
+            # OpenCV wrote a stream of JPEG frames under an image's name (out.png): a broken picture
+            raise InputError(f"--overlay writes a video: give it a name ending in {', '.join(OVERLAY_SUFFIXES[1:])}"
+                             f" (got {overlay.name}; --plot draws a picture)")
         check_expectation(expect, tolerance)
         units = _units(scale, unit)
         sources = expand_inputs(videos)

@@ -104,6 +104,15 @@ def test_overlay_refuses_to_replace_and_is_for_one_input(tmp_path: Path) -> None
     assert batch.exit_code == 2 and "--overlay" in batch.stderr
 
 
+def test_an_overlay_named_as_a_picture_is_refused_before_the_analysis(tmp_path: Path) -> None:
+    """``--overlay out.png`` wrote a stream of JPEG frames under a picture's name: a file no
+    viewer opens. Now one line and exit 2, and nothing written."""
+    picture = tmp_path / "overlay.png"
+    result = runner.invoke(app, ["analyze", str(BOX), "--fixation", "auto", "--overlay", str(picture)])
+    assert result.exit_code == 2 and "writes a video" in result.stderr and ".mp4" in result.stderr
+    assert "Traceback" not in result.output and not picture.exists()
+
+
 def test_scale_and_unit_give_table_one_in_inches_with_omega_unchanged() -> None:
     base = ["analyze", str(BOX), "--fixation", "319.5,179.5", "--end", "2", "-f", "csv"]
     pixels = pd.read_csv(io.StringIO(runner.invoke(app, base).stdout))
