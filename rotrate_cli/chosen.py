@@ -51,7 +51,7 @@ def follow_points(
     for x, y in points_px:
         if not (0 <= x <= width_px - 1 and 0 <= y <= height_px - 1):
             raise InputError(f"--track {x:g},{y:g} lies outside the {width_px}x{height_px} frame")
-    scale = tracking_scale(width_px, config)
+    scale = tracking_scale(frame_size_px, config)
     rows: list[tuple[int, float, int, float, float]] = []
     notes: list[str] = []
     state: _Csrt | _Klt | None = None

@@ -101,7 +101,8 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     if config.axis_angle_deg is not None and across(config.axis_angle_deg):
         tracker = turned(tracker)
     thumbnails = Thumbnails()
-    keyframes = Keyframes(tracking_scale(info.width_px, tracker))
+    scale = tracking_scale((info.width_px, info.height_px), tracker)
+    keyframes = Keyframes(scale)
     run = _track(video, config, tracker, progress, thumbnails, keyframes)
     if run.frames == 0:
         raise InputError(f"no frame of {source} lies between --start and --end")
@@ -121,7 +122,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         _check_tracked(run, thumbnails, source)
     tracks = by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
-    shaken = None if config.points_px else find_shake(tracks, run.frames, 1.0 / tracking_scale(info.width_px, tracker))
+    shaken = None if config.points_px else find_shake(tracks, run.frames, 1.0 / scale)
     if shaken is not None:
         # a hand-held camera: track again knowing its motion, so that the still background is let
         # go of as on a tripod and the points go to the body; the positions as a still camera saw them
@@ -217,7 +218,7 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     ``keyframes`` (both emptied first: a run again replaces the last); ``camera``: its own motion,
     where known."""
     info = video.info
-    scale = tracking_scale(info.width_px, tracker)
+    scale = tracking_scale((info.width_px, info.height_px), tracker)
     blur = tracker.blur_sigma_px
     if blur is None:
         blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX

@@ -1,6 +1,7 @@
 """Multi-point tracking: Shi-Tomasi corners followed by pyramidal Lucas-Kanade optical flow.
 
-Each frame is reduced to a grey image no wider than ``TrackerConfig.track_width_px`` (done in
+Each frame is scaled to a grey image whose longer side is ``TrackerConfig.track_size_px`` at most
+(and ``track_min_size_px`` at least: small frames are enlarged) (done in
 the decode thread by :func:`tracking_image`), then every live point is tracked forward and back
 again; a point whose round trip misses its start by more than ``fb_max_error_px`` is dropped
 (it turned out of view, was occluded, or slid). New corners are seeded every few frames where
@@ -92,13 +93,16 @@ class TrackerConfig:
 
     Attributes:
         max_points: the most points tracked at once.
-        track_width_px: frames wider than this are reduced (area-averaged) before tracking.
-        track_min_width_px: frames narrower than this are enlarged (by the smallest whole factor
-            that reaches it, bilinearly) before tracking. The tracker's sizes are in its image's
-            pixels: its window is 21 px long, and it seeds only where that window lies wholly on
-            moving pixels. On the bicycle wheel halved to 256x192 that left 24 corners in the
-            whole clip and "no point could be tracked"; enlarged twice, it reads as the whole-size
-            clip does.
+        track_size_px: frames whose longer side is longer than this are reduced (area-averaged)
+            before tracking: a 1280x720 frame to 640x360, and one held upright, 720x1280, to
+            360x640 alike (by its width, it was tracked at 640x1138, and the record clip turned a
+            quarter took 5.7 s against 2.8).
+        track_min_size_px: frames whose longer side is shorter than this are enlarged (by the
+            smallest whole factor that reaches it, bilinearly) before tracking. The tracker's
+            sizes are in its image's pixels: its window is 21 px long, and it seeds only where that
+            window lies wholly on moving pixels. On the bicycle wheel halved to 256x192 that left
+            24 corners in the whole clip and "no point could be tracked"; enlarged twice, it reads
+            as the whole-size clip does.
         quality_level: Shi-Tomasi corner quality, relative to the best corner in the frame.
         min_distance_px: the least spacing between seeded corners.
         win_width_px, win_height_px: the Lucas-Kanade window. It is narrow across the motion on
@@ -148,8 +152,8 @@ class TrackerConfig:
     """
 
     max_points: int = 300
-    track_width_px: int = 640
-    track_min_width_px: int = 320
+    track_size_px: int = 640
+    track_min_size_px: int = 320
     quality_level: float = 0.01
     min_distance_px: float = 6.0
     win_width_px: int = 5
@@ -169,18 +173,21 @@ class TrackerConfig:
     roi: Roi | None = None
 
 
-def tracking_scale(width_px: int, config: TrackerConfig) -> float:
-    """The factor by which frames of this width are scaled for tracking: under 1 where they are
-    reduced, a whole number over 1 where they are enlarged."""
-    if width_px < config.track_min_width_px:
-        return float(math.ceil(config.track_min_width_px / max(1, width_px)))
-    return min(1.0, config.track_width_px / float(width_px))
+def tracking_scale(size_px: tuple[int, int], config: TrackerConfig) -> float:
+    """The factor by which frames of this size (width, height) are scaled for tracking: under 1
+    where they are reduced, a whole number over 1 where they are enlarged (see
+    :class:`TrackerConfig`)."""
+    side = max(1, *size_px)
+    if side < config.track_min_size_px:
+        return float(math.ceil(config.track_min_size_px / side))
+    return min(1.0, config.track_size_px / float(side))
 
 
 def tracking_image(
     image: np.ndarray, scale: float, blur_sigma_px: float = 0.0, levels: np.ndarray | None = None
 ) -> np.ndarray:
-    """Grey, reduced (and lightly blurred) copy of a BGR or grey frame, as the tracker wants it.
+    """Grey, scaled (see :func:`tracking_scale`; and lightly blurred) copy of a BGR or grey frame,
+    as the tracker wants it.
     Cheap enough for the decode thread. ``levels`` (a 256-entry table, see
     :meth:`rotrate_cli.decode.FrameSource.luma_levels`) maps a decoder's luma to grey; applied
     after the reduction, on fewer pixels (the reduction and blur are linear, so the order does
@@ -353,7 +360,7 @@ class CornerTracker:
     def __init__(self, frame_size_px: tuple[int, int], config: TrackerConfig) -> None:
         width_px, height_px = frame_size_px
         self.config = config
-        self.scale = tracking_scale(width_px, config)
+        self.scale = tracking_scale(frame_size_px, config)
         self._size = (max(1, round(width_px * self.scale)), max(1, round(height_px * self.scale)))
         self._seed_mask = np.full((self._size[1], self._size[0]), 255, np.uint8)
         if config.roi is not None:

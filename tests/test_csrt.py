@@ -46,7 +46,7 @@ def _sliding_texture(step_px: float, frames: int) -> list[Frame]:
 def test_csrt_points_follow_a_sub_pixel_slide() -> None:
     frames = _sliding_texture(0.37, 40)
     # the frames as they are (track_frames takes them as tracking_image made them: not enlarged)
-    config = csrt_settings(TrackerConfig(blur_sigma_px=0.0, track_min_width_px=0))
+    config = csrt_settings(TrackerConfig(blur_sigma_px=0.0, track_min_size_px=0))
     run = track_frames(frames, (200, 120), config, kind=CsrtTracker)
     tracks = run.tracks
     assert tracks["track"].nunique() >= 5
