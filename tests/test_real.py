@@ -8,6 +8,7 @@ import json
 import math
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
@@ -142,8 +143,6 @@ def test_record_whose_spindle_is_outside_the_picture(tmp_path: Path) -> None:
     """The record clip's first 8 s cropped 1000 px wide: its spindle (x 1093) lies outside the
     frame. The rate still comes from the repetition, and --fixation auto puts the axis where the
     label's paths turn, outside the frame (it used to be put 28,000 px away)."""
-    import cv2
-
     clip = VIDEOS / "record_oblique_closeup.mp4"
     need(clip, "the record video")
     truth = json.loads(clip.with_suffix(".truth.json").read_text())
@@ -167,8 +166,6 @@ def test_record_whose_spindle_is_outside_the_picture(tmp_path: Path) -> None:
 def _wheel_turned(clip: Path, out: Path, turn: int | None, flip: bool, size: float = 1.0) -> Path:
     """The wheel's clip with every frame rotated by ``turn`` (an OpenCV rotate code) and/or
     mirrored left to right, and scaled by ``size``."""
-    import cv2
-
     reader = cv2.VideoCapture(str(clip))
     writer = None
     while True:
@@ -194,17 +191,16 @@ def test_the_face_on_wheel_turns_the_way_its_sticker_does_however_the_picture_is
     it told only how the picture was held. Mirrored, the sense must change."""
     clip = VIDEOS / "bicycle_wheel_frontal.mp4"
     need(clip, "the bicycle wheel video")
+    truth = json.loads(clip.with_suffix(".truth.json").read_text())
     sticker = np.loadtxt(clip.with_suffix(".track.csv"), delimiter=",", skiprows=1)
     assert sticker[-1, 3] < sticker[0, 3]  # anticlockwise on the screen
-    import cv2
-
     for turn, flip, expected in ((None, False, "ccw"), (cv2.ROTATE_180, False, "ccw"), (None, True, "cw")):
         source = clip if turn is None and not flip else _wheel_turned(clip, tmp_path / f"wheel_{turn}_{flip}.mp4",
                                                                       turn, flip)
         analysis = analyze(source, AnalysisConfig(fixation_px=None))
         assert analysis.direction == expected, (turn, flip)
         assert analysis.direction_in_picture
-        assert analysis.omega_rad_s == pytest.approx(2.27298, rel=0.02)
+        assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.02)
 
 
 def test_the_record_turns_clockwise_seen_from_above() -> None:
@@ -220,12 +216,13 @@ def test_the_record_turns_clockwise_seen_from_above() -> None:
 def test_the_wheel_filmed_small_is_measured(tmp_path: Path, size: float) -> None:
     """At 256x192 "no point could be tracked": the tracker's window (21 px long) seeds only where
     it lies wholly on moving pixels, and the wheel's thin spokes left 24 corners in the whole
-    clip. Frames narrower than 320 px are now enlarged for tracking (measured: -0.56% at half
+    clip. Frames under 320 px on their longer side are now enlarged for tracking (measured: -0.56% at half
     size, -0.69% at a quarter, 128x96)."""
     clip = VIDEOS / "bicycle_wheel_frontal.mp4"
     need(clip, "the bicycle wheel video")
+    truth = json.loads(clip.with_suffix(".truth.json").read_text())
     small = _wheel_turned(clip, tmp_path / "wheel_small.mp4", None, False, size)
     analysis = analyze(small, AnalysisConfig(fixation_px=None))
-    assert analysis.omega_rad_s == pytest.approx(2.27298, rel=0.02)
-    assert analysis.omega_low_rad_s <= 2.27298 <= analysis.omega_high_rad_s
+    assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.02)
+    assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
     assert analysis.direction in ("ccw", "unknown")
