@@ -17,6 +17,7 @@ from rotrate_cli.fits import RateResult, changes, rate_change
 from rotrate_cli.geometry import AxisSpread, Geometry, fixation_doubt
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.outliers import Combined, combine
+from rotrate_cli.verdict import MIN_TRACKS
 from rotrate_cli.view import rate_from_paths, view_from_paths
 
 
@@ -56,6 +57,7 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
     if not config.points_px:
         result, lone = with_lone_track(result, fps)
         doubts += (lone,) if lone else ()
+        result = with_few_tracks(result)
     result, axis_note = with_axis_doubt(result, geometry.axis_spread)
     lens_notes += (axis_note,) if axis_note else ()
     camera = geometry.camera(size_px)
@@ -151,6 +153,28 @@ def with_lone_track(result: RateResult, fps: float) -> tuple[RateResult, str | N
     widened = replace(result, combined=Combined(combined.omega_rad_s, 0.0, high, 1))
     return widened, (f"one track alone gave the rate, and nothing says it lies on the turning body: the 95% interval "
                      f"runs from 0 to {'half a turn a frame' if math.isfinite(high) else 'any rate'}")
+
+
+def with_few_tracks(result: RateResult) -> RateResult:
+    """Where fewer automatic tracks than :data:`rotrate_cli.verdict.MIN_TRACKS` (but more than
+    one) gave the rate, the result with its interval widened to hold each of those tracks' own
+    95% interval. So few say nothing of which of them lie on the turning body, nor does their
+    scatter give an interval (the verdict calls such a result weak): any one may be the body's.
+    The bicycle wheel's 3-7 s about the truth's fixation kept three tracks, at 0.76, 1.08 and 2.80
+    rad/s (the wheel's tyre and rim carry almost no texture the tracker holds): 0.94 within
+    [0, 2.00], its truth 2.27 outside; now [0, 5.26]."""
+    combined = result.combined
+    if not (1 < combined.tracks_used < MIN_TRACKS and math.isfinite(combined.omega_rad_s)):
+        return result
+    chosen = result.features[result.features["inlier"].to_numpy(dtype=bool)]
+    sign = -1.0 if combined.omega_rad_s < 0 else 1.0
+    rate = sign * np.abs(chosen["omega_rad_s"].to_numpy(dtype=float))
+    half = Z95 * chosen["omega_se_rad_s"].to_numpy(dtype=float)
+    low = float(np.nanmin(np.r_[combined.omega_low_rad_s, rate - half]))
+    high = float(np.nanmax(np.r_[combined.omega_high_rad_s, rate + half]))
+    if combined.omega_rad_s > 0 and combined.omega_low_rad_s >= 0:
+        low = max(low, 0.0)
+    return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
 
 
 #: The normal distribution's two-sided 95% point.
