@@ -168,13 +168,11 @@ def with_few_tracks(result: RateResult) -> RateResult:
         return result
     chosen = result.features[result.features["inlier"].to_numpy(dtype=bool)]
     sign = -1.0 if combined.omega_rad_s < 0 else 1.0
-    rate = sign * np.abs(chosen["omega_rad_s"].to_numpy(dtype=float))
-    half = Z95 * chosen["omega_se_rad_s"].to_numpy(dtype=float)
-    low = float(np.nanmin(np.r_[combined.omega_low_rad_s, rate - half]))
-    high = float(np.nanmax(np.r_[combined.omega_high_rad_s, rate + half]))
-    if combined.omega_rad_s > 0 and combined.omega_low_rad_s >= 0:
-        low = max(low, 0.0)
-    return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
+    each = [Combined(sign * abs(rate), sign * abs(rate) - Z95 * se, sign * abs(rate) + Z95 * se, 1)
+            for rate, se in zip(chosen["omega_rad_s"], chosen["omega_se_rad_s"], strict=True)]
+    widened = _spanning(result, *each).combined
+    low = max(widened.omega_low_rad_s, 0.0) if combined.omega_low_rad_s >= 0 else widened.omega_low_rad_s
+    return replace(result, combined=replace(widened, omega_low_rad_s=low))
 
 
 #: The normal distribution's two-sided 95% point.
