@@ -44,6 +44,8 @@ JOLT_PX = 0.15
 #: the body's turn out. A hand's: a rendered 2-7 px shake, 0.9 of its rms.
 JOLT_NOISE = 3.0
 JOLT_SHARE = 0.05
+#: The rms of a two-dimensional normal error over the median of its sizes: sqrt(2) / sqrt(2 ln 2).
+RMS_PER_MEDIAN = 1.0 / math.sqrt(math.log(2.0))
 #: Rounds of (path, background) found in turn.
 ROUNDS = 4
 
@@ -55,7 +57,8 @@ class Shake:
     Attributes:
         rms_px: the camera path's rms about its mean, full-resolution pixels.
         largest_px: its largest distance from its mean.
-        jolt_px: the rms change of its step from one frame to the next.
+        jolt_px: its typical change of step from one frame to the next, as an rms (the median
+            of their sizes, scaled; see :func:`_typical_jolt`).
         background_tracks: tracks that showed it.
     """
 
@@ -110,7 +113,7 @@ def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0) -> tupl
     distance = np.hypot(shifted[:, 0], shifted[:, 1])
     rms = float(np.sqrt(np.mean(distance ** 2)))
     # a hand's shake jolts from frame to frame; a patch of the body moves smoothly with its turn
-    jolt = float(np.sqrt(np.mean((np.diff(shifted, 2, axis=0) ** 2).sum(axis=1)))) if len(shifted) > 2 else 0.0
+    jolt = _typical_jolt(shifted)
     # the path's own noise, from the background's scatter about it, jolts too (sqrt 6 for a second
     # difference of independent errors)
     noise = math.sqrt(6.0) * float(np.median(spread[background])) / math.sqrt(background.sum())
@@ -223,6 +226,19 @@ class _Steps:
             shift[k] = (c * shift[k - 1, 0] - s * shift[k - 1, 1] + step_shift[k, 0],
                         s * shift[k - 1, 0] + c * shift[k - 1, 1] + step_shift[k, 1])
         return CameraPath(self.first_frame, angle, shift)
+
+
+def _typical_jolt(path_px: np.ndarray) -> float:
+    """The path's typical change of step from one frame to the next, as an rms: the median of
+    its sizes times :data:`RMS_PER_MEDIAN`. A hand jolts the picture all through a clip; where a
+    body's points pass for the background, the path jumps only where those points come and go
+    (a box's top seen from 60 degrees above, 0.2 rad/s: jolts of 1.3-4 px in the first 3 frames,
+    where 8 of its 38 points were followed, and 0.02-0.18 px after; their rms, 0.81 px, read as a
+    hand's shake, whose taking out turned the rate to -33%)."""
+    if len(path_px) < 3:
+        return 0.0
+    sizes = np.hypot(*np.diff(path_px, 2, axis=0).T)
+    return RMS_PER_MEDIAN * float(np.median(sizes))
 
 
 def _median_by(frame: np.ndarray, values: np.ndarray, frames: int) -> np.ndarray:
