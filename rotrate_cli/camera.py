@@ -186,8 +186,9 @@ def _changing(tracks: pd.DataFrame, offsets: np.ndarray) -> bool:
 def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, float], angle_deg: float,
                     config: AnalysisConfig, size_px: tuple[int, int]) -> RateResult:
     """The result with its interval widened to hold the rates measured through the lenses at the
-    ends of a found lens's 95% interval (its inverse focal length +-1.96 standard errors, and at
-    least +-:data:`LENS_FLOOR` of it; 0 is orthographic), or where the lens was sought and could
+    ends of a found lens's 95% interval (its inverse focal length +- the widest of
+    :data:`LENS_SE_WIDTHS` standard errors, :data:`LENS_FLOOR` of it and :data:`LENS_FLOOR_TAN` in
+    tan(fov/2); 0 is orthographic), or where the lens was sought and could
     not be told, through the orthographic camera and a :data:`WIDEST_FOV_DEG` lens. As it is for
     any other lens."""
     focal = lens.estimate
