@@ -6,12 +6,12 @@ import threading
 
 import cv2
 import pytest
+import threadpoolctl  # a runtime dependency (pyproject): its absence is a failure, not a skip
 
 from rotrate_cli.pools import available_cores, opencv_threads, pipeline_threads
 
 
 def test_pools_are_sized_for_the_run_and_put_back() -> None:
-    threadpoolctl = pytest.importorskip("threadpoolctl")
     before = cv2.getNumThreads()
     blas_before = [info["num_threads"] for info in threadpoolctl.threadpool_info() if info["user_api"] == "blas"]
     with pipeline_threads():
