@@ -30,18 +30,23 @@ def test_rendered_orthographic_clip_within_one_percent(name: str, tmp_path: Path
     assert result.direction in (truth["direction"], "unknown")
 
 
+#: Spheres through a 35-degree lens turning 0.6-0.8 rad (bench-random 4009 and 5015).
+UNDECIDED_SENSE = {
+    4009: SceneConfig(shape="sphere", omega_rad_s=-0.2, fps=30.0, duration_s=4.0, projection="perspective",
+                      fov_deg=35.0, axis_offset_px=-80.0, jpeg_quality=30, start_angle_rad=3.706792403697556,
+                      seed=4009),
+    5015: SceneConfig(shape="sphere", omega_rad_s=0.2, fps=30.0, duration_s=3.0, projection="perspective",
+                      fov_deg=35.0, start_angle_rad=1.3433300801933392, seed=5015),
+}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [4009, 5015])
+@pytest.mark.parametrize("seed", sorted(UNDECIDED_SENSE))
 def test_an_undecided_sense_does_not_read_as_a_spin_up(seed: int, tmp_path: Path) -> None:
-    """Spheres through a 35-degree lens turning 0.6-0.8 rad (bench-random 4009, 5015): the
-    tracks do not tell the sense, and a half of the clip fitted in the wrong one read as a
-    spin-up; moving the axis for it gave -5.6% and -20.8% (weak). The halves' intervals now hold
-    both senses' rates (fits._joint)."""
-    scene = SceneConfig(shape="sphere", omega_rad_s=-0.2 if seed == 4009 else 0.2, fps=30.0,
-                        duration_s=4.0 if seed == 4009 else 3.0, projection="perspective", fov_deg=35.0,
-                        axis_offset_px=-80.0 if seed == 4009 else 0.0, jpeg_quality=30 if seed == 4009 else None,
-                        start_angle_rad=3.706792403697556 if seed == 4009 else 1.3433300801933392, seed=seed)
-    write_clip(scene, tmp_path / "sphere.mp4")
+    """The tracks of these spheres do not tell the sense, and a half of the clip fitted in the
+    wrong one read as a spin-up; moving the axis for it gave -5.6% and -20.8% (weak). The
+    halves' intervals now hold both senses' rates (fits._joint)."""
+    write_clip(UNDECIDED_SENSE[seed], tmp_path / "sphere.mp4")
     result = analyze(tmp_path / "sphere.mp4", AnalysisConfig(fixation_px=None))
     assert result.omega_rad_s == pytest.approx(0.2, rel=0.03)
     assert result.omega_low_rad_s <= 0.2 <= result.omega_high_rad_s
