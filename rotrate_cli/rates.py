@@ -399,18 +399,25 @@ def _fit_batch(
 
 
 #: How much better (in summed evidence, see :func:`_sense_evidence`) one sense of rotation
-#: must explain all tracks than the other before the sense is reported.
+#: must explain all tracks than the other before the sense is reported ...
 SENSE_EVIDENCE = 25.0
+#: ... and, with many tracks, this much times the square root of their number. Where the two
+#: senses fit alike, each track's evidence is noise of spread about 3 (simulated pinhole tracks,
+#: 5 to 80 of them), so the sum's spread grows as the root of the count: a fixed bar let 80
+#: tracks that could not tell the sense decide it wrongly in 15% of trials, and 8 (about 2.5
+#: spreads) holds that under 3% at every count tried.
+SENSE_EVIDENCE_PER_ROOT_TRACK = 8.0
 #: The most one track may add to that evidence: a rigid body's sense is a vote of its tracks,
 #: and a track the pinhole model cannot follow (a slipping point, a fit that ran away) must not
 #: outvote hundreds of good ones.
 TRACK_EVIDENCE_CAP = 9.0
 
 
-def _sense_evidence(plus: dict[int, TrackFit], minus: dict[int, TrackFit], count: pd.Series) -> float:
+def _sense_evidence(plus: dict[int, TrackFit], minus: dict[int, TrackFit], count: pd.Series) -> tuple[float, int]:
     """Positive when the anticlockwise fits explain the tracks better: per track, the drop in
-    squared misfit in units of that track's noise variance, capped at +-TRACK_EVIDENCE_CAP, summed."""
-    total = 0.0
+    squared misfit in units of that track's noise variance, capped at +-TRACK_EVIDENCE_CAP, summed;
+    with the number of tracks that added to it."""
+    total, voters = 0.0, 0
     for k, fit in plus.items():
         other = minus[k]
         if not (math.isfinite(fit.rms_residual) and math.isfinite(other.rms_residual)):
@@ -419,7 +426,8 @@ def _sense_evidence(plus: dict[int, TrackFit], minus: dict[int, TrackFit], count
         rss_plus, rss_minus = fit.rms_residual**2 * n, other.rms_residual**2 * n
         variance = max(min(rss_plus, rss_minus) / max(n - 3, 1), 1e-6)
         total += float(np.clip((rss_minus - rss_plus) / variance, -TRACK_EVIDENCE_CAP, TRACK_EVIDENCE_CAP))
-    return total
+        voters += 1
+    return total, voters
 
 
 def fit_tracks(samples: pd.DataFrame, min_samples: int = 4, camera: Camera | None = None) -> dict[int, TrackFit]:
@@ -439,9 +447,9 @@ def fit_tracks(samples: pd.DataFrame, min_samples: int = 4, camera: Camera | Non
         return {k: replace(fit, sense=float(camera.sense) if math.isfinite(fit.omega_rad_s) else math.nan)
                 for k, fit in told.items()}
     fits = {sense: _fit_all(samples, min_samples, camera, sense) for sense in (1, -1)}
-    evidence = _sense_evidence(fits[1], fits[-1], samples.groupby("track", sort=False).size())
+    evidence, voters = _sense_evidence(fits[1], fits[-1], samples.groupby("track", sort=False).size())
     chosen = 1 if evidence >= 0 else -1
-    decided = abs(evidence) >= SENSE_EVIDENCE
+    decided = abs(evidence) >= max(SENSE_EVIDENCE, SENSE_EVIDENCE_PER_ROOT_TRACK * math.sqrt(voters))
     return {k: replace(fit, sense=float(chosen) if decided and math.isfinite(fit.omega_rad_s) else math.nan)
             for k, fit in fits[chosen].items()}
 
