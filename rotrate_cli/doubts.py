@@ -44,11 +44,12 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
     uncertainty is then carried (it shows in the tracks' own interval). ``clock_resolution_s``:
     how finely the frames' times are known (whole seconds in photographs' EXIF); ``fps``: the
     frame rate (a lone track's interval reaches half a turn a frame)."""
+    sense_note = undecided_sense(result.combined)
     result = with_lens_doubt(result, geometry.lens, geometry.fixation_px, geometry.axis_angle_deg, config, size_px)
     result = with_clock_doubt(result, clock_resolution_s)
     if repeating or result.combined.tracks_used == 0:
         return Checked(result)
-    lens_notes: tuple[str, ...] = ()
+    lens_notes: tuple[str, ...] = (sense_note,) if sense_note else ()
     if geometry.lens.unsettled and geometry.lens.focal_px is None:
         lens_notes = (f"the tracks could not tell the camera's lens (too few turned far enough, or the rate changes): "
                       f"the paper's orthographic model is used, and the 95% interval holds the rates through any "
@@ -78,6 +79,25 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
         result = with_sides_span(result)
     result, note = with_paths_rate(result, view_tracks) if camera is None else (result, None)
     return Checked(result, doubts, lens_notes + ((note,) if note else ()))
+
+
+#: The two senses' rates must differ by more than this fraction of the rate for the user to be
+#: told that the tracks could not choose between them.
+SENSES_APART_FRACTION = 0.02
+
+
+def undecided_sense(combined: Combined) -> str | None:
+    """A line saying that the tracks did not tell the sense of rotation and that, through the
+    lens, the two senses fit rates more than :data:`SENSES_APART_FRACTION` apart; None otherwise."""
+    if combined.senses_rad_s is None:
+        return None
+    anticlockwise, clockwise = combined.senses_rad_s
+    if abs(anticlockwise - clockwise) <= SENSES_APART_FRACTION * abs(combined.omega_rad_s):
+        return None
+    return (f"the tracks do not tell which way the body turns, and through this lens the two ways fit different "
+            f"rates ({min(anticlockwise, clockwise):.4g} and {max(anticlockwise, clockwise):.4g} rad/s): the rate "
+            "is midway and the 95% interval holds both; a clip that turns further, or seen from a little above "
+            "or below the axis, tells them apart")
 
 
 #: Each side of the axis needs this many inlier tracks for the sides to be compared.

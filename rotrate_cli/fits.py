@@ -240,8 +240,10 @@ def _joint(
                      other.omega_low_rad_s, other.omega_rad_s])
     high = np.nanmax([joint.omega_high_rad_s, pooled.omega_high_rad_s, pooled.omega_rad_s,
                       other.omega_high_rad_s, other.omega_rad_s])
-    point = 0.5 * (joint.omega_rad_s + other.omega_rad_s) if math.isfinite(other.omega_rad_s) else joint.omega_rad_s
-    return Combined(point, float(low), float(high), joint.tracks_used)
+    if not math.isfinite(other.omega_rad_s):
+        return Combined(joint.omega_rad_s, float(low), float(high), joint.tracks_used)
+    point = 0.5 * (joint.omega_rad_s + other.omega_rad_s)
+    return Combined(point, float(low), float(high), joint.tracks_used, (joint.omega_rad_s, other.omega_rad_s))
 
 
 def no_result_message(features: pd.DataFrame) -> str:

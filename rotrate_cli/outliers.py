@@ -61,12 +61,16 @@ class Combined:
         omega_rad_s: the weighted mean rate, rad/s.
         omega_low_rad_s, omega_high_rad_s: its 95% interval, rad/s.
         tracks_used: how many tracks went into it.
+        senses_rad_s: through a pinhole, where the tracks do not tell the sense of rotation,
+            the rates of the two senses (anticlockwise, clockwise), which the rate lies between;
+            None otherwise.
     """
 
     omega_rad_s: float
     omega_low_rad_s: float
     omega_high_rad_s: float
     tracks_used: int
+    senses_rad_s: tuple[float, float] | None = None
 
 
 

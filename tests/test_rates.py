@@ -9,6 +9,9 @@ import pandas as pd
 import pytest
 
 from rotrate_cli import rates
+from rotrate_cli.doubts import undecided_sense
+from rotrate_cli.fits import rates_from_offsets
+from rotrate_cli.outliers import RejectionConfig
 
 
 @pytest.mark.parametrize("omega", [0.1, 0.327, 1.0, 3.14])
@@ -194,9 +197,6 @@ def test_an_undecided_sense_reads_alike_both_ways_round() -> None:
     tell the sense read the same rate, midway between the two senses' rates, within the same
     interval, which holds the truth: nothing depends on which sense is the default (the
     anticlockwise one's rate was the point: 0.205 rad/s for the clip, 0.185 for its mirror)."""
-    from rotrate_cli.fits import rates_from_offsets
-    from rotrate_cli.outliers import RejectionConfig
-
     camera = rates.Camera(500.0, 0.0)
     tracks = _pinhole_tracks(np.random.default_rng(5), 80, 0.2)
     tracks["frame"] = np.round(tracks["time_s"] * 30).astype(int)
@@ -205,6 +205,9 @@ def test_an_undecided_sense_reads_alike_both_ways_round() -> None:
     for result in results:
         assert result.direction == "unknown"  # undecided
         assert result.combined.omega_low_rad_s <= 0.2 <= result.combined.omega_high_rad_s
+        slower, faster = sorted(result.combined.senses_rad_s)
+        assert slower < result.combined.omega_rad_s < faster
+        assert f"{slower:.4g} and {faster:.4g} rad/s" in undecided_sense(result.combined)
     first, second = (result.combined for result in results)
     assert (first.omega_rad_s, first.omega_low_rad_s, first.omega_high_rad_s) == pytest.approx(
         (second.omega_rad_s, second.omega_low_rad_s, second.omega_high_rad_s), rel=1e-3)
