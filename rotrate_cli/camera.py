@@ -65,6 +65,8 @@ class Lens:
         estimate: what the tracks said about the camera where it was sought; None otherwise.
         unsettled: the lens was sought and the tracks could not tell it (too few turned far
             enough, or the rate changed): the orthographic camera stands in for an unknown one.
+        told_sense: +1 anticlockwise, -1 clockwise seen from the axis's top end where the user
+            said it (``--direction``); 0 otherwise.
     """
 
     focal_px: float | None
@@ -72,19 +74,21 @@ class Lens:
     source: str = "orthographic"
     estimate: FocalEstimate | None = None
     unsettled: bool = False
+    told_sense: int = 0
 
 
 def lens_from(config: AnalysisConfig, info: VideoInfo) -> Lens:
     """The lens given in the options, else the photographs' own (EXIF), else orthographic (to be
-    found from the tracks where ``config.find_focal``)."""
+    found from the tracks where ``config.find_focal``); with the sense of turning the user gave."""
     elevation = config.elevation_deg if config.elevation_deg is not None else math.nan
+    told = {"ccw": 1, "cw": -1}.get(config.direction or "", 0)
     if config.focal_px is not None:
-        return Lens(config.focal_px, elevation, "given")
+        return Lens(config.focal_px, elevation, "given", told_sense=told)
     if config.fov_deg is not None:
-        return Lens(rates.focal_px_from_fov(config.fov_deg, info.width_px), elevation, "given")
+        return Lens(rates.focal_px_from_fov(config.fov_deg, info.width_px), elevation, "given", told_sense=told)
     if info.focal_px is not None and config.find_focal and config.method == "fit":
-        return Lens(info.focal_px, elevation, "exif")
-    return Lens(None, elevation, "orthographic")
+        return Lens(info.focal_px, elevation, "exif", told_sense=told)
+    return Lens(None, elevation, "orthographic", told_sense=told)
 
 
 def camera_at(lens: Lens, size_px: tuple[int, int], fixation_px: tuple[float, float],
@@ -98,6 +102,8 @@ def camera_at(lens: Lens, size_px: tuple[int, int], fixation_px: tuple[float, fl
     axis_px = (fixation_px[0] - (width_px / 2.0 - 0.5)) * ux + (fixation_px[1] - (height_px / 2.0 - 0.5)) * uy
     elevation = lens.elevation_deg if math.isfinite(lens.elevation_deg) else 0.0
     told = lens.estimate.sense if lens.source == "found" and lens.estimate is not None else math.nan
+    if lens.told_sense:  # the user's word stands over the view's
+        told = float(lens.told_sense)
     return rates.Camera(lens.focal_px, axis_px / lens.focal_px, math.cos(math.radians(elevation)),
                         int(told) if math.isfinite(told) else 0)
 
@@ -124,7 +130,7 @@ def find_lens(tracks: pd.DataFrame, fixation_px: tuple[float, float], angle_deg:
         return replace(lens, estimate=estimate, source="found")
     if not math.isfinite(lens.elevation_deg):
         elevation = estimate.elevation_deg
-    found = Lens(estimate.focal_px, elevation, "found", estimate)
+    found = Lens(estimate.focal_px, elevation, "found", estimate, told_sense=lens.told_sense)
     if changing and not _steady_through(found, tracks, offsets, fixation_px, angle_deg, size_px):
         return replace(lens, unsettled=True)
     return found

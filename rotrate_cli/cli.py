@@ -226,6 +226,12 @@ def analyze_command(
                                                                        "(--fov); found where the angle comes from the "
                                                                        "paths.")
                          ] = None,
+    direction: Annotated[str | None, typer.Option("--direction", metavar="ccw|cw",
+                                                  help="Which way the object turns, seen from the top "
+                                                       "end of its axis, if you know it: through a lens "
+                                                       "the two ways fit different rates, and a short, "
+                                                       "level view cannot always tell them apart.")
+                         ] = None,
     window: Annotated[float | None, typer.Option("--window", metavar="SECONDS",
                                                  help="Also measure omega(t) over a sliding "
                                                                   "window of this many seconds.")] = None,
@@ -326,6 +332,7 @@ def analyze_command(
         config = AnalysisConfig(fixation_px=None if point is None else (point[0], point[1]), fps=fps,
                                 times_s=frame_times,
                                 axis_angle_deg=axis_angle, angle_from=angle_from, elevation_deg=elevation,
+                                direction=None if direction is None else direction.strip().lower(),
                                 window_s=window, start_s=start,
                                 end_s=end, every=every,
                                 method=method, fov_deg=fov_deg, focal_px=focal_px, find_focal=find_focal,

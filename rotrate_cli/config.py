@@ -17,6 +17,8 @@ from rotrate_cli.tracking import (
 
 #: How the axis's angle is found when not given (see ``AnalysisConfig.angle_from``).
 ANGLE_SOURCES = ("auto", "motion", "paths")
+#: The ways round an object can be told to turn (``--direction``), seen from the axis's top end.
+DIRECTIONS = ("ccw", "cw")
 
 
 @dataclass(frozen=True)
@@ -37,6 +39,10 @@ class AnalysisConfig:
         elevation_deg: how far the camera looks down on the object, degrees, for the pinhole
             model (``fov_deg``/``focal_px``); None: level, or found from the paths where the
             angle comes from them.
+        direction: ``ccw`` or ``cw``, seen from the top end of the axis (as the report's
+            ``direction`` reads), where the user knows which way the object turns; None: the
+            tracks tell it where they can. Through a lens the two ways fit different rates, and
+            the tracks of a short turn seen level cannot always tell them apart.
         fps: frame-rate override in frames per second (required for image sequences).
         start_s, end_s: the time span to analyse, in seconds (``end_s`` None: to the end).
         every: use every N-th frame's positions for the rates (tracking still sees every frame);
@@ -71,6 +77,7 @@ class AnalysisConfig:
     axis_angle_deg: float | None = None
     angle_from: str = "auto"
     elevation_deg: float | None = None
+    direction: str | None = None
     start_s: float = 0.0
     end_s: float | None = None
     every: int | None = 1
@@ -119,6 +126,8 @@ def check_config(config: AnalysisConfig) -> None:
             raise InputError("--elevation must be between -80 and 80 degrees")
         if config.fov_deg is None and config.focal_px is None and not config.find_focal:
             raise InputError("--elevation is for the pinhole model: drop --fov ortho, or give --fov or --focal-px")
+    if config.direction not in (None, *DIRECTIONS):
+        raise InputError(f"--direction must be one of {', '.join(DIRECTIONS)}; got {config.direction!r}")
     if config.tracker_kind not in TRACKERS:
         raise InputError(f"--tracker must be one of {', '.join(TRACKERS)}; got {config.tracker_kind!r}")
     if config.segment and config.fixation_px is not None:

@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from rotrate_cli import rates
 from rotrate_cli.camera import WIDEST_FOV_DEG, with_lens_doubt
 from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.fits import RateResult, changes, rate_change
@@ -70,6 +71,9 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
         message, about_found = doubt
         doubts += (message,)
         result = _spanning(result, about_found)
+    told = told_sense_doubt(result, camera, geometry.lens.told_sense)
+    if told is not None:
+        doubts += (told,)
     change = rate_change(result, config, camera)
     if change is not None:
         doubts += (change,)
@@ -96,8 +100,27 @@ def undecided_sense(combined: Combined) -> str | None:
         return None
     return (f"the tracks do not tell which way the body turns, and through this lens the two ways fit different "
             f"rates ({min(anticlockwise, clockwise):.4g} and {max(anticlockwise, clockwise):.4g} rad/s): the rate "
-            "is midway and the 95% interval holds both; a clip that turns further, or seen from a little above "
-            "or below the axis, tells them apart")
+            "is midway and the 95% interval holds both; give --direction ccw|cw (seen from the axis's top end) if "
+            "you know which way it turns")
+
+
+def told_sense_doubt(result: RateResult, camera: rates.Camera | None, told_sense: int) -> str | None:
+    """A line saying that the inlier tracks, fitted in both senses, clearly tell the sense
+    opposite to the one the user gave (``--direction``), whose rate is then wrong; None
+    otherwise (no lens, no sense given, or the tracks do not tell)."""
+    if camera is None or not told_sense:
+        return None
+    inliers = result.features.loc[result.features["inlier"], "track"]
+    samples = result.offsets[result.offsets["track"].isin(inliers)]
+    if samples.empty:
+        return None
+    fits = rates.fit_tracks(samples, camera=replace(camera, sense=0))
+    senses = {fit.sense for fit in fits.values() if math.isfinite(fit.sense)}
+    if senses != {float(-told_sense)}:
+        return None
+    given, found = ("ccw", "cw") if told_sense > 0 else ("cw", "ccw")
+    return (f"the tracks say the object turns {found}, not {given} as --direction says, and through a lens "
+            "the two ways fit different rates: check --direction")
 
 
 #: Each side of the axis needs this many inlier tracks for the sides to be compared.

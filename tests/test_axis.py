@@ -403,3 +403,19 @@ def test_the_lens_question_is_asked_only_where_a_lens_is_sought() -> None:
     assert asked == [False] and geometry.lens.source == "orthographic"
     geometry, _ = locate(footage.tracks, footage.motion_angle_deg, found, footage.info, seek_lens=answer(True))
     assert asked == [False, True] and geometry.lens.source == "found"
+
+
+def test_direction_takes_ccw_or_cw() -> None:
+    result = CliRunner().invoke(app, ["analyze", str(SAMPLES / "box_ortho.mp4"), "--fixation", "auto",
+                                      "--direction", "left"])
+    assert result.exit_code == 2 and "--direction must be one of ccw, cw" in result.stderr
+
+
+def test_a_direction_given_is_the_camera_s_sense() -> None:
+    from rotrate_cli.camera import camera_at, lens_from
+    from rotrate_cli.decode import VideoInfo
+
+    info = VideoInfo("clip.mp4", 640, 360, 30.0, 90, False, False)
+    for direction, sense in (("ccw", 1), ("cw", -1), (None, 0)):
+        lens = lens_from(AnalysisConfig(fixation_px=None, fov_deg=50.0, direction=direction), info)
+        assert camera_at(lens, (640, 360), (319.5, 179.5), 0.0).sense == sense

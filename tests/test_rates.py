@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from rotrate_cli import rates
-from rotrate_cli.doubts import undecided_sense
+from rotrate_cli.doubts import told_sense_doubt, undecided_sense
 from rotrate_cli.fits import rates_from_offsets
 from rotrate_cli.outliers import RejectionConfig
 
@@ -211,3 +211,27 @@ def test_an_undecided_sense_reads_alike_both_ways_round() -> None:
     first, second = (result.combined for result in results)
     assert (first.omega_rad_s, first.omega_low_rad_s, first.omega_high_rad_s) == pytest.approx(
         (second.omega_rad_s, second.omega_low_rad_s, second.omega_high_rad_s), rel=1e-3)
+
+
+def _fitted_through(tracks: pd.DataFrame, camera: rates.Camera):
+    tracks = tracks.assign(frame=np.round(tracks["time_s"] * 30).astype(int))
+    return rates_from_offsets(tracks, "fit", RejectionConfig(), camera)
+
+
+def test_a_sense_the_user_gave_is_fitted_and_checked_against_the_tracks() -> None:
+    """--direction: the tracks are fitted in the sense given. Where they clearly tell the other
+    (80 tracks turned 0.75 rad through a 500 px pinhole) a doubt says so; where they tell the
+    same, or cannot tell, nothing is said."""
+    tracks = _pinhole_tracks(np.random.default_rng(3), 80, 0.5)
+    for told, doubted in ((1, False), (-1, True)):
+        camera = rates.Camera(500.0, 0.0, 1.0, told)
+        result = _fitted_through(tracks, camera)
+        assert result.direction == ("ccw" if told > 0 else "cw")
+        doubt = told_sense_doubt(result, camera, told)
+        assert (doubt is not None) == doubted
+    assert "turns ccw, not cw as --direction says" in doubt
+    right = _fitted_through(tracks, rates.Camera(500.0, 0.0, 1.0, 1)).combined
+    assert right.omega_low_rad_s <= 0.5 <= right.omega_high_rad_s
+    weak = _pinhole_tracks(np.random.default_rng(5), 80, 0.2)  # undecided (see above)
+    camera = rates.Camera(500.0, 0.0, 1.0, -1)
+    assert told_sense_doubt(_fitted_through(weak, camera), camera, -1) is None
