@@ -52,7 +52,7 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
         return Checked(result)
     lens_notes: tuple[str, ...] = (sense_note,) if sense_note else ()
     if geometry.lens.unsettled and geometry.lens.focal_px is None:
-        lens_notes = (f"the tracks could not tell the camera's lens (too few turned far enough, or the rate changes): "
+        lens_notes += (f"the tracks could not tell the camera's lens (too few turned far enough, or the rate changes): "
                       f"the paper's orthographic model is used, and the 95% interval holds the rates through any "
                       f"lens up to {WIDEST_FOV_DEG:g} degrees across; give --fov DEG if you know it",)
     doubts: tuple[str, ...] = ()
