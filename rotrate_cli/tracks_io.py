@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import io
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -37,8 +38,13 @@ def read_tracks(path: str | Path, position_column: str = "x") -> pd.DataFrame:
     if "\x00" in text:
         raise InputError(f"{path} is not a text table (CSV)")
     try:
-        table = pd.read_csv(io.StringIO(text), comment="#", skipinitialspace=True, dtype=str,
-                            keep_default_na=False, quoting=csv.QUOTE_MINIMAL, index_col=False)
+        with warnings.catch_warnings():
+            # a row longer than the header would lose its extra values with only a warning
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            table = pd.read_csv(io.StringIO(text), comment="#", skipinitialspace=True, dtype=str,
+                                keep_default_na=False, quoting=csv.QUOTE_MINIMAL, index_col=False)
+    except pd.errors.ParserWarning as exc:
+        raise InputError(f"could not read {path} as CSV: a row has more values than the header has names") from exc
     except (pd.errors.ParserError, pd.errors.EmptyDataError, csv.Error, ValueError) as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputError(f"could not read {path} as CSV: {first}") from exc

@@ -35,6 +35,7 @@ def test_reads_feature_or_track_ids_comments_and_time(tmp_path: Path) -> None:
         ("track,frame,x\n1,0.5,1\n", "whole numbers"),
         ("track,frame,x\n", "no rows"),
         ("", "could not read"),
+        ("track,frame,x\n1,0,1,7\n", "more values than the header"),
     ],
 )
 def test_malformed_tables(tmp_path: Path, text: str, message: str) -> None:
