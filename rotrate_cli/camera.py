@@ -18,7 +18,7 @@ from rotrate_cli.fits import RateResult, rates_from_offsets
 from rotrate_cli.focal import ORTHOGRAPHIC_WIDTHS, FocalEstimate, estimate_focal
 from rotrate_cli.keyframes import Keyframes
 from rotrate_cli.lazy import pandas as pd
-from rotrate_cli.outliers import Combined, RejectionConfig
+from rotrate_cli.outliers import RejectionConfig
 
 #: A found lens's 95% interval, in its inverse focal length, is the widest of three: this many of
 #: its standard errors, :data:`LENS_FLOOR` of itself, and :data:`LENS_FLOOR_TAN` in tan(fov/2).
@@ -235,7 +235,7 @@ def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, fl
         low = max(low, 0.0)  # a scatter carried to an end does not make the rate negative
     high = float(np.nanmax([combined.omega_high_rad_s,
                             *(rate + up for rate, (_, up) in zip(rates_at_ends, spread, strict=True))]))
-    return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
+    return replace(result, combined=replace(combined, omega_low_rad_s=low, omega_high_rad_s=high))
 
 
 def method_name(method: str, camera: rates.Camera | None) -> str:

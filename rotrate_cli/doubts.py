@@ -98,6 +98,14 @@ def undecided_sense(combined: Combined) -> str | None:
     anticlockwise, clockwise = combined.senses_rad_s
     if abs(anticlockwise - clockwise) <= SENSES_APART_FRACTION * abs(combined.omega_rad_s):
         return None
+    if combined.seen_sense:
+        seen, rate = ("ccw", anticlockwise) if combined.seen_sense > 0 else ("cw", clockwise)
+        unseen, other = ("cw", clockwise) if combined.seen_sense > 0 else ("ccw", anticlockwise)
+        return (f"the tracks' fits do not tell which way the body turns, and through this lens the two ways fit "
+                f"different rates: the rate is the {seen} one ({rate:.4g} rad/s), the way the near side travels "
+                f"in the picture (its points cross in front of the axis), and the 95% interval also holds the "
+                f"{unseen} one ({other:.4g} rad/s); give --direction ccw|cw (seen from the axis's top end) if you "
+                "know which way it turns")
     return (f"the tracks do not tell which way the body turns, and through this lens the two ways fit different "
             f"rates ({min(anticlockwise, clockwise):.4g} and {max(anticlockwise, clockwise):.4g} rad/s): the rate "
             "is midway and the 95% interval holds both; give --direction ccw|cw (seen from the axis's top end) if "
@@ -159,7 +167,7 @@ def _spanning(result: RateResult, *others: Combined) -> RateResult:
     combined = result.combined
     low = float(np.nanmin([combined.omega_low_rad_s, *(other.omega_low_rad_s for other in others)]))
     high = float(np.nanmax([combined.omega_high_rad_s, *(other.omega_high_rad_s for other in others)]))
-    return replace(result, combined=Combined(combined.omega_rad_s, low, high, combined.tracks_used))
+    return replace(result, combined=replace(combined, omega_low_rad_s=low, omega_high_rad_s=high))
 
 
 def _sides_apart(result: RateResult) -> tuple[Combined, Combined] | None:
@@ -242,8 +250,10 @@ def with_axis_doubt(result: RateResult, spread: AxisSpread | None) -> tuple[Rate
         return result, None
     omega = combined.omega_rad_s
     low = omega - math.hypot(omega - combined.omega_low_rad_s, reach)
+    if omega > 0 and combined.omega_low_rad_s >= 0:
+        low = max(low, 0.0)  # as the lens's (camera.with_lens_doubt): a rate's size is not negative
     high = omega + math.hypot(combined.omega_high_rad_s - omega, reach)
-    widened = replace(result, combined=Combined(omega, low, high, combined.tracks_used))
+    widened = replace(result, combined=replace(combined, omega_low_rad_s=low, omega_high_rad_s=high))
     before = combined.omega_high_rad_s - combined.omega_low_rad_s
     if not (high - low > AXIS_WIDENS * before):
         return widened, None
@@ -268,8 +278,10 @@ def with_clock_doubt(result: RateResult, clock_resolution_s: float) -> RateResul
         return result
     clock = abs(omega) * clock_resolution_s / span_s
     low = omega - math.hypot(omega - combined.omega_low_rad_s, clock)
+    if omega > 0 and combined.omega_low_rad_s >= 0:
+        low = max(low, 0.0)  # a rate's size is not negative (nor does the next widening make it so)
     high = omega + math.hypot(combined.omega_high_rad_s - omega, clock)
-    return replace(result, combined=Combined(omega, low, high, combined.tracks_used))
+    return replace(result, combined=replace(combined, omega_low_rad_s=low, omega_high_rad_s=high))
 
 
 def with_paths_rate(result: RateResult, view_tracks: pd.DataFrame) -> tuple[RateResult, str | None]:

@@ -61,9 +61,14 @@ class Combined:
         omega_rad_s: the weighted mean rate, rad/s.
         omega_low_rad_s, omega_high_rad_s: its 95% interval, rad/s.
         tracks_used: how many tracks went into it.
-        senses_rad_s: through a pinhole, where the tracks do not tell the sense of rotation,
-            the rates of the two senses (anticlockwise, clockwise), which the rate lies between;
-            None otherwise.
+        senses_rad_s: through a pinhole, where the tracks' fits do not tell the sense of
+            rotation, the rates of the two senses (anticlockwise, clockwise), which the interval
+            holds; None otherwise.
+        seen_sense: where ``senses_rad_s`` is set, +1 or -1 when the rate is that sense's, as
+            the near side's travel shows it (:func:`rotrate_cli.fits.rates_from_offsets`); 0
+            when it is midway between the two.
+        seen_interval_rad_s: with ``seen_sense``, that sense's own 95% interval (the interval
+            above also holds the other sense's); None otherwise.
     """
 
     omega_rad_s: float
@@ -71,6 +76,8 @@ class Combined:
     omega_high_rad_s: float
     tracks_used: int
     senses_rad_s: tuple[float, float] | None = None
+    seen_sense: int = 0
+    seen_interval_rad_s: tuple[float, float] | None = None
 
 
 

@@ -103,6 +103,8 @@ def test_sides_that_disagree_widen_the_interval_to_hold_both() -> None:
 
 
 def test_a_coarse_clock_widens_the_tracks_interval() -> None:
+    from dataclasses import replace
+
     import pandas as pd
 
     from rotrate_cli.doubts import with_clock_doubt
@@ -115,3 +117,9 @@ def test_a_coarse_clock_widens_the_tracks_interval() -> None:
     assert widened.omega_low_rad_s == pytest.approx(0.1 - math.hypot(0.001, 0.1 / 30), rel=1e-9)
     assert widened.omega_high_rad_s == pytest.approx(0.1 + math.hypot(0.001, 0.1 / 30), rel=1e-9)
     assert with_clock_doubt(result, 0.0).combined == result.combined  # a video's clock
+    # an interval that reaches 0 stays there: 1e-17 below it, the next widening took it to -0.30
+    # rad/s (EPFL car 02's first 30 photographs, three tracks)
+    touching = replace(result, combined=Combined(0.07, 0.0, 0.27, 3, (0.09, 0.07), -1, (0.05, 0.09)))
+    widened = with_clock_doubt(touching, 1.0).combined
+    assert widened.omega_low_rad_s == 0.0
+    assert (widened.senses_rad_s, widened.seen_sense) == ((0.09, 0.07), -1)  # carried through

@@ -144,6 +144,17 @@ def test_a_single_inexact_return_of_the_picture_is_not_a_sure_turn() -> None:
     assert judge(slow_tracks, _single_closing(excess=0.25, frames=250), 20).quality == "good"
 
 
+def test_an_exact_return_is_doubted_by_the_sense_the_near_side_travels() -> None:
+    """Tracks whose fits through the lens did not tell the sense: their interval holds the other
+    sense's rate too (0.092 rad/s), high enough to pass an exact return for a turn, while the
+    sense their near side's travel shows turns under half a turn in the period (the first 50
+    photographs of EPFL car 02: the picture back half a turn on, read as a good +90%)."""
+    seen = Combined(0.053, 0.041, 0.143, 20, (0.092, 0.053), -1, (0.044, 0.061))
+    doubted = judge(seen, _single_closing(excess=0.03), 20)
+    assert doubted.quality == "weak" and "turn only 41% of a turn" in doubted.weak_because[0]
+    assert doubted.omega_low_rad_s <= 0.041 and doubted.omega_high_rad_s >= 2 * math.pi / 49.0
+
+
 def test_a_doubted_return_gives_an_interval_that_holds_both_readings() -> None:
     """A single return doubted as a look-alike view: the interval spans the repetition's rate (a
     turn) and the tracks' interval (a look-alike view); an exact return is still reported, an

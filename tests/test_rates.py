@@ -9,8 +9,10 @@ import pandas as pd
 import pytest
 
 from rotrate_cli import rates
+from rotrate_cli.axis import refine_axis_offset
 from rotrate_cli.doubts import told_sense_doubt, undecided_sense
 from rotrate_cli.fits import rates_from_offsets
+from rotrate_cli.geometry import _inliers_and_rate
 from rotrate_cli.outliers import RejectionConfig
 
 
@@ -211,6 +213,55 @@ def test_an_undecided_sense_reads_alike_both_ways_round() -> None:
     first, second = (result.combined for result in results)
     assert (first.omega_rad_s, first.omega_low_rad_s, first.omega_high_rad_s) == pytest.approx(
         (second.omega_rad_s, second.omega_low_rad_s, second.omega_high_rad_s), rel=1e-3)
+
+
+def _near_side_tracks(rng: np.random.Generator, count: int, omega: float, focal_px: float = 500.0) -> pd.DataFrame:
+    """As :func:`_pinhole_tracks`, but each track seen only on the near side of its circle, within
+    1.2 rad of its middle, as on an opaque body: a clockwise turn travels left there."""
+    rows = []
+    for track in range(count):
+        time_s = np.arange(45) / 30.0 + rng.uniform(0, 2)
+        angle = omega * (time_s - time_s[22]) + rng.uniform(-1.2, 1.2)
+        radius = rng.uniform(0.2, 0.6)
+        x_n = radius * np.sin(angle) / (1 - radius * np.cos(angle))
+        rows.append(pd.DataFrame({"track": track, "time_s": time_s,
+                                  "offset_px": x_n * focal_px + rng.normal(0, 1.5, 45)}))
+    tracks = pd.concat(rows, ignore_index=True)
+    return tracks.assign(frame=np.round(tracks["time_s"] * 30).astype(int))
+
+
+@pytest.mark.parametrize(("seed", "omega", "direction"), [(1, 0.2, "ccw"), (3, -0.2, "cw")])
+def test_an_undecided_sense_is_the_one_the_near_side_travels(seed: int, omega: float, direction: str) -> None:
+    """Where the fits through the lens do not tell the sense but the tracks, all on the near side
+    of an opaque body, travel one way (the paper's rule), the rate is that sense's, and the
+    interval still holds the other's: midway, these read 0.249 and 0.229 rad/s for 0.2."""
+    result = rates_from_offsets(_near_side_tracks(np.random.default_rng(seed), 80, omega), "fit", RejectionConfig(),
+                                rates.Camera(500.0, 0.0))
+    combined = result.combined
+    assert result.direction == direction
+    assert combined.senses_rad_s is not None  # the fits did not tell
+    assert combined.seen_sense == (1 if direction == "ccw" else -1)
+    assert combined.omega_rad_s == pytest.approx(0.2, rel=0.02)
+    assert combined.omega_low_rad_s <= min(combined.senses_rad_s) <= max(combined.senses_rad_s) \
+        <= combined.omega_high_rad_s
+    assert f"the rate is the {direction} one" in undecided_sense(combined)
+
+
+def test_an_undecided_sense_places_the_axis_without_the_lens() -> None:
+    """Where the tracks cannot tell the sense through a lens, the axis is placed
+    orthographically: the pinhole model in the wrong sense moved a fixation 10 px right of the
+    axis 91 px to its left (the mirror image, the anticlockwise default); now 4 px or less
+    from it, the clip and its mirror alike."""
+    camera = rates.Camera(500.0, 0.0)
+    tracks = _pinhole_tracks(np.random.default_rng(5), 80, 0.2)
+    tracks["frame"] = np.round(tracks["time_s"] * 30).astype(int)
+    for table in (tracks, tracks.assign(offset_px=-tracks["offset_px"])):
+        off_axis = table.assign(offset_px=table["offset_px"] - 10.0)  # measured from 10 px right of the axis
+        result = rates_from_offsets(off_axis, "fit", RejectionConfig(), camera)
+        assert result.direction == "unknown"
+        offsets, omega, placing = _inliers_and_rate(result, camera)
+        assert placing is None
+        assert refine_axis_offset(offsets, omega, placing) == pytest.approx(-10.0, abs=4.0)
 
 
 def _fitted_through(tracks: pd.DataFrame, camera: rates.Camera):

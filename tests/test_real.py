@@ -46,7 +46,9 @@ def test_a_car_half_a_turn_on_is_not_taken_for_a_turn(sequence: str, clock: str)
     and the picture's single return read twice the rate, as good. Now weak. seq09's picture comes
     back once, inexactly: its interval holds both readings (a turn, or a look-alike view at the
     tracks' rate), and so the truth, and the tracks' rate is reported. seq02's does not come back
-    within these 50: its tracks alone read 35-40% low, and say they are weak."""
+    within these 50: its tracks alone read 5-14% low (35-40% before the recurrence's lag was chosen
+    by its standard error and an undecided sense by the near side's travel), and say they are
+    weak."""
     folder = CARS / sequence
     need(folder, f"the EPFL car sequence {sequence}")
     truth = json.loads((folder / "truth.json").read_text())
@@ -59,7 +61,7 @@ def test_a_car_half_a_turn_on_is_not_taken_for_a_turn(sequence: str, clock: str)
         assert analysis.omega_low_rad_s <= expected <= analysis.omega_high_rad_s
         assert analysis.omega_high_rad_s > 1.8 * expected  # a turn in the return's time is in it too
     else:
-        assert analysis.period is None and abs(analysis.omega_rad_s / expected - 1) > 0.05
+        assert analysis.period is None and analysis.omega_rad_s < 1.5 * expected  # not a turn in 50 photographs
 
 
 def test_bicycle_wheel_seen_face_on() -> None:
