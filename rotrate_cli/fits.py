@@ -136,6 +136,10 @@ def sample_rates(
     return flag_samples(rates.fit_samples(offsets, rate), features, rejection)
 
 
+#: The sense of rotation of a reported direction: +1 anticlockwise, -1 clockwise.
+SENSES = {"ccw": 1, "cw": -1}
+
+
 def _sorted_by_track_and_time(offsets: pd.DataFrame) -> bool:
     track_step = np.diff(offsets["track"].to_numpy())
     time_step = np.diff(offsets["time_s"].to_numpy())
@@ -155,6 +159,7 @@ def rates_from_offsets(
     if method == "paper":
         _, features = judge_paper(rates.paper_samples(offsets))
         combined = combine_plain(features.loc[features["inlier"], "omega_rad_s"].to_numpy())
+        direction = _direction(offsets, features)
     else:
         long_enough, short = _split_short(offsets, max(rejection.min_samples, 4))
         features = judge_fits(long_enough, rates.fit_tracks(long_enough, rejection.min_samples, camera), rejection)
@@ -166,12 +171,7 @@ def rates_from_offsets(
         combined = combine(used["omega_rad_s"].to_numpy(), used["omega_se_rad_s"].to_numpy())
         direction = _direction(offsets, features)
         combined = _joint(offsets, used, combined, rejection, camera, SENSES.get(direction, 0))
-        return RateResult(offsets, features, combined, direction)
-    return RateResult(offsets, features, combined, _direction(offsets, features))
-
-
-#: The sense of rotation of a reported direction: +1 anticlockwise, -1 clockwise.
-SENSES = {"ccw": 1, "cw": -1}
+    return RateResult(offsets, features, combined, direction)
 
 
 #: Tracks too short to fit are set apart before the fits only where they are at least this share
