@@ -670,8 +670,20 @@ def _quiet_native_logs() -> None:
     warnings.simplefilter("ignore", RuntimeWarning)
 
 
+def _one_blas_thread() -> None:
+    """OpenBLAS (NumPy's, and SciPy's own copy) at one thread for this process and the batch's
+    workers, set before either is loaded (they read it once, at load). An analysis runs BLAS at
+    one thread anyway (:mod:`rotrate_cli.pools`), but each copy starts a thread per core when it
+    loads, and those spin while the imports go on: measured on a 2-core machine, ``rotrate
+    analyze`` on the record clip took 5.6% less processor time in all (0.24 s a process, wall time
+    the same), and ``rotrate synth`` half. A user's own setting is kept."""
+    if "numpy" not in sys.modules:
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
 def main() -> None:
     """Console-script entry point."""
+    _one_blas_thread()
     if "--debug" not in sys.argv:
         _quiet_native_logs()
     app()
