@@ -129,6 +129,54 @@ def test_refining_the_axis_moves_it_onto_the_truth(rng: np.random.Generator) -> 
     assert axes.refine_axis_offset(offsets, 0.7) == pytest.approx(-3.0, abs=0.05)
 
 
+def test_a_found_axis_is_moved_to_where_its_moves_end(monkeypatch: pytest.MonkeyPatch) -> None:
+    """On a short arc the axis's place and the rate are each found from the other, and each move
+    of the axis goes only part of the way: here 15% of what is left (a coupling of 0.85, as on
+    the 15th to 64th photographs of EPFL car 10). Two plain moves left 72% of the first point's
+    error; the moves now end where the point and the rate agree."""
+    from rotrate_cli import geometry
+
+    settled_px, coupling = 7.0, 0.85
+    ux, uy = axes.unit_offset(10.0)
+    at = {"along": 0.0}
+    measured = []
+
+    def shift(offsets: object, omega: float, camera: object) -> float:
+        return (1.0 - coupling) * (settled_px - at["along"])
+
+    def measure(point: tuple[float, float]) -> tuple[None, None]:
+        at["along"] = (point[0] - 300.0) * ux + (point[1] - 100.0) * uy
+        measured.append(point)
+        return None, None
+
+    monkeypatch.setattr(geometry, "_inliers_and_rate", lambda result, camera: (None, 1.0, None))
+    monkeypatch.setattr(geometry.axes, "refine_axis_offset", shift)
+    fixation, _, _ = geometry._refine_fixation(None, None, (300.0, 100.0), 10.0, measure)
+    assert (fixation[0] - 300.0) * ux + (fixation[1] - 100.0) * uy == pytest.approx(settled_px, abs=0.02)
+    assert (fixation[0] - 300.0) * uy - (fixation[1] - 100.0) * ux == pytest.approx(0.0, abs=1e-9)  # across only
+    assert len(measured) <= geometry.REFINE_STEPS
+
+
+@pytest.mark.parametrize(("coupling", "gain"), [(0.0, 1.0), (-0.4, 1.0), (math.nan, 1.0), (0.5, 2.0),
+                                                (0.85, 1 / 0.15), (0.97, 10.0), (1.6, 10.0)])
+def test_the_axis_and_rate_coupling_multiplies_the_rate_s_uncertainty(coupling: float, gain: float) -> None:
+    """An error in the rate moves the axis, which moves the rate: 1 / (1 - coupling) times the
+    error the tracks' scatter and the axis's placement give (at most 10: at 1 or more the tracks
+    do not tell the two apart)."""
+    from rotrate_cli.doubts import with_axis_doubt
+    from rotrate_cli.fits import RateResult
+    from rotrate_cli.geometry import AxisSpread
+    from rotrate_cli.outliers import Combined
+
+    offsets = pd.DataFrame({"track": [1] * 3, "time_s": [0.0, 1.0, 2.0], "offset_px": [0.0] * 3})
+    result = RateResult(offsets, pd.DataFrame(), Combined(0.1, 0.099, 0.102, 20), "ccw")
+    spread = AxisSpread(se_px=0.3, rate_per_px=0.0, coupling=coupling)  # the placement alone adds nothing
+    widened = with_axis_doubt(result, spread)[0].combined
+    assert widened.omega_rad_s == 0.1
+    assert widened.omega_low_rad_s == pytest.approx(0.1 - gain * 0.001, rel=1e-9)
+    assert widened.omega_high_rad_s == pytest.approx(0.1 + gain * 0.002, rel=1e-9)
+
+
 def test_the_axis_offsets_standard_error_holds_how_tracks_disagree(rng: np.random.Generator) -> None:
     """Each track turns about its own axis, 1 px rms about the true one (a window sliding on a
     real surface, a model left short), on arcs under a turn. Over repeated draws the shared
