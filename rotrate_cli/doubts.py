@@ -247,11 +247,12 @@ def with_axis_doubt(result: RateResult, spread: AxisSpread | None) -> tuple[Rate
     +0.73% within [+0.07%, +4.54%], missing; an EPFL car's first 30 photographs, placed to +-13
     px: +53% within [+30%, +77%]). And the axis is placed at the rate measured about it: on a
     short arc a rate a little high puts the axis a little aside, about which the rate reads high
-    again, so that tracks agreeing closely can agree on an axis and a rate both off. The EPFL
-    cars' parts of a turn, timed by their EXIF clocks (five cars, 30 and 50 photographs from
-    every 15th): 5 of the 10 results called good missed the truth, by 2-6% within intervals of
-    +-1-2% (one car's 15th to 64th photographs: its axis 7 px aside, +5.6% within [+4.4%,
-    +7.0%], at a coupling of 0.85); with the gain all the results called good held the truth."""
+    again, so that tracks agreeing closely can agree on an axis and a rate both off, even with
+    the axis settled where the two agree (:func:`rotrate_cli.geometry._refine_fixation`). The
+    EPFL cars' parts of a turn, timed by their EXIF clocks (five cars, 30, 50 and 70 photographs
+    from every 15th), settled: without the gain 7 of the 21 results called good missed the truth
+    (one car's 60th to 89th photographs -3.6% within [-4.4%, -2.8%], at a coupling of 0.9); with
+    it, 1 of 15, a rate from the clip's repetition, which needs no axis."""
     combined = result.combined
     if spread is None or combined.tracks_used == 0 or not math.isfinite(combined.omega_rad_s):
         return result, None

@@ -465,7 +465,8 @@ def _refine_fixation(
     the EPFL cars' parts of a turn (five cars, 30 to 70 photographs from every 15th) kept most of
     their first axis's error, and 5 of the 15 results called good missed the truth by 2-6%
     (one car's 15th to 64th photographs: +5.6% within [+4.4%, +7.0%], its axis 7 px aside).
-    Settled, the same results read -0.3% there, and none called good missed it."""
+    Settled, that one reads -0.55%, and of the tracks' results called good none missed it (with
+    the interval's gain for the coupling: :func:`rotrate_cli.doubts.with_axis_doubt`)."""
     ux, uy = axes.unit_offset(angle_deg)
     along = 0.0  # how far the point has moved along the offset direction
     last: tuple[float, float] | None = None  # the last point's place along it and the move found there
