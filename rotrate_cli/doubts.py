@@ -251,7 +251,7 @@ def with_axis_doubt(result: RateResult, spread: AxisSpread | None) -> tuple[Rate
     the axis settled where the two agree (:func:`rotrate_cli.geometry._refine_fixation`). The
     EPFL cars' parts of a turn, timed by their EXIF clocks (five cars, 30, 50 and 70 photographs
     from every 15th), settled: without the gain 7 of the 21 results called good missed the truth
-    (one car's 60th to 89th photographs -3.6% within [-4.4%, -2.8%], at a coupling of 0.9); with
+    (one car's 60th to 89th photographs -3.6% within [-4.4%, -2.8%], at a coupling of 0.84); with
     it, 1 of 15, a rate from the clip's repetition, which needs no axis."""
     combined = result.combined
     if spread is None or combined.tracks_used == 0 or not math.isfinite(combined.omega_rad_s):
