@@ -141,14 +141,11 @@ def _summary(chosen: list[Case]) -> int:
     errors, unmarked, failed, listed = [], 0, 0, []
     for case in chosen:
         try:
-            analysis = analyze(case.source, AnalysisConfig(fixation_px=None, start_s=case.start_s, end_s=case.end_s))
+            analysis = analyze(case.source, _config(case))
         except RotrateError:
             failed += 1
             continue
-        error = analysis.omega_rad_s / case.truth_rad_s - 1.0
-        low = analysis.omega_low_rad_s / case.truth_rad_s - 1.0
-        high = analysis.omega_high_rad_s / case.truth_rad_s - 1.0
-        covers = math.isfinite(low) and low <= 0.0 <= high
+        error, low, high, covers = _scored(case, analysis)
         held[analysis.quality][0] += 1
         held[analysis.quality][1] += covers
         errors.append(abs(error))
@@ -164,6 +161,19 @@ def _summary(chosen: list[Case]) -> int:
           f"{100 * UNMARKED_LIMIT:.0f}% and not marked weak: {unmarked}")
     print("\n".join(listed))
     return unmarked
+
+
+def _config(case: Case) -> AnalysisConfig:
+    """The case's analysis: default settings but for what the case gives."""
+    return AnalysisConfig(fixation_px=case.fixation_px, fps=case.fps, start_s=case.start_s, end_s=case.end_s)
+
+
+def _scored(case: Case, analysis) -> tuple[float, float, float, bool]:
+    """The error, the interval's ends (fractions of the truth, from it) and whether it holds the truth."""
+    error = analysis.omega_rad_s / case.truth_rad_s - 1.0
+    low = analysis.omega_low_rad_s / case.truth_rad_s - 1.0
+    high = analysis.omega_high_rad_s / case.truth_rad_s - 1.0
+    return error, low, high, math.isfinite(low) and low <= 0.0 <= high
 
 
 def _view(analysis) -> str:
@@ -218,7 +228,7 @@ def _table(chosen: list[Case]) -> tuple[int, int, int]:
     print("-" * len(header))
     covered = missed = unmarked = 0
     for case in chosen:
-        config = AnalysisConfig(fixation_px=case.fixation_px, fps=case.fps, start_s=case.start_s, end_s=case.end_s)
+        config = _config(case)
         started = time.perf_counter()
         try:
             analysis = analyze(case.source, config)
@@ -227,10 +237,7 @@ def _table(chosen: list[Case]) -> tuple[int, int, int]:
             missed += 1
             continue
         seconds = time.perf_counter() - started
-        error = analysis.omega_rad_s / case.truth_rad_s - 1.0
-        low = analysis.omega_low_rad_s / case.truth_rad_s - 1.0
-        high = analysis.omega_high_rad_s / case.truth_rad_s - 1.0
-        covers = math.isfinite(low) and low <= 0.0 <= high
+        error, low, high, covers = _scored(case, analysis)
         sense = "n/a" if case.direction is None else ("right" if analysis.direction == case.direction
                                                       else analysis.direction)
         covered += covers
