@@ -102,6 +102,65 @@ def test_sides_that_disagree_widen_the_interval_to_hold_both() -> None:
     assert with_sides_span(same).combined == same.combined  # sides that agree change nothing
 
 
+def _result_with_rates(rate: np.ndarray, se: float = 0.01, reasons: list[str] | None = None):
+    """A rate result whose moving tracks have these rates (inliers unless ``reasons`` say
+    otherwise), combined as the inliers' random-effects mean."""
+    from rotrate_cli.fits import RateResult
+
+    reason = reasons if reasons is not None else [""] * len(rate)
+    features = pd.DataFrame({"track": np.arange(1, len(rate) + 1), "omega_rad_s": rate,
+                             "omega_se_rad_s": np.full(len(rate), se), "inlier": [r == "" for r in reason],
+                             "reason": reason})
+    inlier = features["inlier"].to_numpy()
+    return RateResult(pd.DataFrame({"track": [], "offset_px": []}), features,
+                      combine(rate[inlier], np.full(int(inlier.sum()), se)), "ccw")
+
+
+def test_tracks_that_fall_into_two_groups_of_rates_are_told_and_the_interval_holds_both(
+        rng: np.random.Generator) -> None:
+    """The real record's first 1.5 s: 19 tracks on the grooves' highlights near 0.6 rad/s, 6 on
+    the label near 4 (rejected as disagreeing), nothing between; the result 0.60 within [0, 1.39],
+    its truth 3.55."""
+    from dataclasses import replace
+
+    from rotrate_cli.doubts import rates_split, split_doubt
+
+    slow = 0.6 + 0.15 * rng.standard_normal(19)
+    fast = 4.3 + 0.4 * rng.standard_normal(6)
+    result = _result_with_rates(np.r_[slow, fast], reasons=[""] * 19 + ["slides"] * 6)
+    assert result.combined.omega_high_rad_s < 3.5
+    split = rates_split(result)
+    assert split is not None
+    slower, faster = split
+    assert (slower.tracks_used, faster.tracks_used) == (19, 6)
+    assert faster.omega_low_rad_s < 4.3 < faster.omega_high_rad_s
+    assert "19 read" in split_doubt(slower, faster) and "6 read" in split_doubt(slower, faster)
+    # both groups within the inliers (the truth's fixation): the mean falls between, and again
+    assert rates_split(_result_with_rates(np.r_[slow, fast])) is not None
+    # a clockwise result's groups are signed as its rate
+    mixed = _result_with_rates(np.r_[slow, fast])
+    slower, faster = rates_split(replace(mixed, combined=combine(-slow, np.full(19, 0.01))))
+    assert faster.omega_rad_s < slower.omega_rad_s < 0
+    assert faster.omega_low_rad_s < -4.3 < faster.omega_high_rad_s
+
+
+def test_one_body_s_scattered_rates_do_not_split(rng: np.random.Generator) -> None:
+    """A heavy-tailed scatter of one rate (Student's t, 3 degrees of freedom: tracker slips) does
+    not split however many tracks; nor do two groups far apart where the smaller is under the
+    share (3 of 25), nor those with tracks between them."""
+    from rotrate_cli.doubts import SPLIT_MIN_SHARE, rates_split
+
+    for count in (8, 25, 300, 3000):
+        assert rates_split(_result_with_rates(0.5 + 0.01 * rng.standard_t(3, count))) is None
+    few = np.r_[0.6 + 0.1 * rng.standard_normal(22), 4.0 + 0.1 * rng.standard_normal(3)]
+    assert 3 / 25 < SPLIT_MIN_SHARE and rates_split(_result_with_rates(few)) is None
+    bridged = np.r_[0.6 + 0.1 * rng.standard_normal(19), np.linspace(0.9, 3.8, 12), 4.0 + 0.1 * rng.standard_normal(6)]
+    assert rates_split(_result_with_rates(bridged)) is None
+    # off the body's rejected tracks (other motion) are not the body's second group
+    apart = np.r_[0.6 + 0.1 * rng.standard_normal(19), 4.0 + 0.1 * rng.standard_normal(6)]
+    assert rates_split(_result_with_rates(apart, reasons=[""] * 19 + ["other_motion"] * 6)) is None
+
+
 def test_a_coarse_clock_widens_the_tracks_interval() -> None:
     from dataclasses import replace
 
