@@ -161,6 +161,27 @@ def test_one_body_s_scattered_rates_do_not_split(rng: np.random.Generator) -> No
     assert rates_split(_result_with_rates(apart, reasons=[""] * 19 + ["other_motion"] * 6)) is None
 
 
+def test_an_axis_found_from_two_tracks_leaves_the_rate_open() -> None:
+    """Two tracks cannot say how well they place an axis found from them: the interval runs from
+    0 to half a turn a frame, either way of turning; with the axis given, or three tracks, the
+    interval stays as it was."""
+    from dataclasses import replace
+
+    from rotrate_cli.doubts import with_unplaced_axis
+    from rotrate_cli.outliers import Combined
+
+    two = _result_with_rates(np.array([0.0148, 0.0129]), se=0.002)
+    widened, doubt = with_unplaced_axis(two, fixation_found=True, fps=1.0)
+    assert (widened.combined.omega_low_rad_s, widened.combined.omega_high_rad_s) == (0.0, math.pi)
+    assert widened.combined.omega_rad_s == two.combined.omega_rad_s and "from 2 tracks" in doubt
+    assert with_unplaced_axis(two, fixation_found=False, fps=1.0) == (two, None)
+    three = _result_with_rates(np.array([0.0148, 0.0129, 0.0140]), se=0.002)
+    assert with_unplaced_axis(three, fixation_found=True, fps=1.0) == (three, None)
+    clockwise = replace(two, combined=Combined(-0.014, -0.03, -0.001, 2))
+    turned = with_unplaced_axis(clockwise, fixation_found=True, fps=1.0)[0].combined
+    assert (turned.omega_low_rad_s, turned.omega_high_rad_s) == (-math.pi, 0.0)
+
+
 def test_a_coarse_clock_widens_the_tracks_interval() -> None:
     from dataclasses import replace
 

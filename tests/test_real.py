@@ -63,6 +63,21 @@ def test_a_part_of_a_car_s_turn_settles_its_axis_and_says_how_well(sequence: str
     assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
 
 
+def test_an_axis_found_from_two_tracks_leaves_the_rate_open() -> None:
+    """seq02's photographs 45-74 (its parts' sweep): two tracks on the front wheel placed the axis
+    on the rear one and read 0.014 rad/s within [0, 0.030], weak, the truth 0.063 outside."""
+    from rotrate_cli.clock import exif_times
+
+    folder = CARS / "seq02"
+    need(folder, "the EPFL car sequence seq02")
+    truth = json.loads((folder / "truth.json").read_text())["omega_rad_s"]
+    times_s = exif_times(sorted(folder.glob("*.jpg"))).times_s
+    analysis = analyze(folder, AnalysisConfig(fixation_px=None, start_s=times_s[45] - 0.05, end_s=times_s[74] + 0.05))
+    assert analysis.quality == "weak" and analysis.tracks_used == 2
+    assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
+    assert [w for w in analysis.warnings if "the axis was found from 2 tracks" in w]
+
+
 @pytest.mark.parametrize("sequence", ["seq02", "seq09"])
 @pytest.mark.parametrize("clock", ["fps", "exif"])
 def test_a_car_half_a_turn_on_is_not_taken_for_a_turn(sequence: str, clock: str) -> None:
