@@ -590,19 +590,41 @@ class KltTracker(CornerTracker):
 
     def __init__(self, frame_size_px: tuple[int, int], config: TrackerConfig) -> None:
         super().__init__(frame_size_px, config)
-        self._lk = {"winSize": (config.win_width_px, config.win_height_px), "maxLevel": config.pyramid_levels}
+        # OpenCV's Lucas-Kanade goes along its window's rows in vector steps, and the rest of each
+        # row one pixel at a time: a window taller than wide (5x21: 21 short rows) is followed on
+        # the transposed images with the window laid along the rows (21x5: 5 long rows), the same
+        # sums in another order, a third cheaper
+        self._transposed = config.win_height_px > config.win_width_px
+        window = (config.win_width_px, config.win_height_px)
+        self._lk = {"winSize": window[::-1] if self._transposed else window, "maxLevel": config.pyramid_levels}
+        self._laid: tuple[np.ndarray, np.ndarray] | None = None  # the last frame as given, and as followed
+
+    def _as_followed(self, grey: np.ndarray) -> np.ndarray:
+        """``grey`` as Lucas-Kanade is run on it (transposed, or as it is); the last one is kept,
+        so each frame is transposed once, as the target of one step and the source of the next."""
+        if not self._transposed:
+            return grey
+        if self._laid is None or self._laid[0] is not grey:
+            self._laid = (grey, cv2.transpose(grey))
+        return self._laid[1]
 
     def _flow(self, source: np.ndarray, target: np.ndarray, points: np.ndarray, guess: np.ndarray,
               levels: int, backward: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Lucas-Kanade from ``source`` to ``target`` (both as :meth:`_as_followed` gives them) for
+        ``points`` starting at ``guess`` (n x 2, x and y in the frame as given)."""
         if len(points) == 0:
             return np.empty((0, 2), np.float32), np.empty(0, np.uint8)
         lk = dict(self._lk, maxLevel=levels, criteria=BACKWARD_CRITERIA if backward else FORWARD_CRITERIA)
-        moved, status, _ = cv2.calcOpticalFlowPyrLK(source, target, points.reshape(-1, 1, 2),
-                                                    guess.reshape(-1, 1, 2).copy(),
+        if self._transposed:
+            points, guess = points[:, ::-1], guess[:, ::-1]
+        moved, status, _ = cv2.calcOpticalFlowPyrLK(source, target, np.ascontiguousarray(points).reshape(-1, 1, 2),
+                                                    np.ascontiguousarray(guess).reshape(-1, 1, 2),
                                                     flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **lk)
-        return moved.reshape(-1, 2), status.ravel()
+        moved = moved.reshape(-1, 2)
+        return (np.ascontiguousarray(moved[:, ::-1]) if self._transposed else moved), status.ravel()
 
     def _move(self, grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        before, after = self._as_followed(self._prev), self._as_followed(grey)
         # Points with a known velocity start from a constant-velocity prediction, close to the
         # answer, so one pyramid level above the base suffices; new points search the full pyramid.
         # The backward pass starts from the same prediction reversed, independent of the forward
@@ -610,8 +632,8 @@ class KltTracker(CornerTracker):
         known = np.any(self._velocity != 0, axis=1)
         if known.all():  # most frames: one pass each way for all points, no regrouping
             points, velocity = self._points, self._velocity
-            moved, status = self._flow(self._prev, grey, points, points + velocity, KNOWN_LEVELS)
-            back, status_back = self._flow(grey, self._prev, moved, moved - velocity, KNOWN_LEVELS, backward=True)
+            moved, status = self._flow(before, after, points, points + velocity, KNOWN_LEVELS)
+            back, status_back = self._flow(after, before, moved, moved - velocity, KNOWN_LEVELS, backward=True)
         else:
             steps = self._velocity.copy()
             predicted = known.copy()
@@ -627,8 +649,8 @@ class KltTracker(CornerTracker):
                 if not group.any():
                     continue
                 points, velocity = self._points[group], steps[group]
-                moved[group], status[group] = self._flow(self._prev, grey, points, points + velocity, levels)
-                back[group], status_back[group] = self._flow(grey, self._prev, moved[group],
+                moved[group], status[group] = self._flow(before, after, points, points + velocity, levels)
+                back[group], status_back[group] = self._flow(after, before, moved[group],
                                                              moved[group] - velocity, levels, backward=True)
         round_trip_px = np.linalg.norm(back - self._points, axis=1)
         keep = (status == 1) & (status_back == 1) & (round_trip_px < self.config.fb_max_error_px)
@@ -644,8 +666,8 @@ class KltTracker(CornerTracker):
             # lose every frame, are not worth the search)
             points, velocity = self._points[retry], self._velocity[retry]
             levels = self.config.pyramid_levels
-            again, status_again = self._flow(self._prev, grey, points, points + velocity, levels)
-            back_again, status_back_again = self._flow(grey, self._prev, again, again - velocity, levels,
+            again, status_again = self._flow(before, after, points, points + velocity, levels)
+            back_again, status_back_again = self._flow(after, before, again, again - velocity, levels,
                                                        backward=True)
             moved[retry] = again
             keep[retry] = ((status_again == 1) & (status_back_again == 1)
