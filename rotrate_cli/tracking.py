@@ -377,6 +377,7 @@ class CornerTracker:
         # the last one, and back to activity_s ago
         self._references: deque[tuple[np.ndarray, float, int]] = deque(maxlen=MAX_REFERENCES)
         self._last_change = np.full(self._seed_mask.shape, -np.inf, np.float32)  # when each pixel last changed, s
+        self._now = np.empty_like(self._last_change)  # the frame's time in every pixel, to copy in
         self._points = np.empty((0, 2), np.float32)
         self._ids = np.empty(0, np.int32)
         self._velocity = np.empty((0, 2), np.float32)  # last displacement per frame, for prediction
@@ -468,18 +469,20 @@ class CornerTracker:
         smoothed = cv2.blur(grey, (3, 3))
         references = self._references
         if references:
-            threshold = self.config.motion_threshold
-            changed = self._changed(smoothed, references[-1], frame_index) > threshold
+            # masks of 0 and 255 and OpenCV's own operations throughout: NumPy's boolean
+            # assignment into the map took three quarters of this method's time
+            changed = self._changed(smoothed, references[-1], frame_index)
             if len(references) > 1:
                 # a slow turn (a motor show's turntable at 0.02-0.05 rad/s) changes its pixels too
                 # little between frames a few apart: where they show under SLOW_SHARE of the change
                 # since activity_s ago, that change counts too (a box at 0.03 rad/s was "no point
                 # could be tracked"; at 0.05 it kept 7 tracks, and its 95% interval missed)
-                since = self._changed(smoothed, references[0], frame_index) > threshold
-                share = int(np.count_nonzero(changed)) / max(1, int(np.count_nonzero(since)))
+                since = self._changed(smoothed, references[0], frame_index)
+                share = cv2.countNonZero(changed) / max(1, cv2.countNonZero(since))
                 if share < SLOW_SHARE:
-                    changed |= since
-            self._last_change[changed] = time_s
+                    changed = cv2.bitwise_or(changed, since)
+            self._now.fill(time_s)
+            cv2.copyTo(self._now, changed, self._last_change)
         references.append((smoothed, time_s, frame_index))
         while len(references) > 2 and time_s - references[1][1] >= self.config.activity_s:
             references.popleft()
@@ -488,13 +491,15 @@ class CornerTracker:
         return ((time_s - self._last_change) <= self.config.activity_s).astype(np.uint8) * 255
 
     def _changed(self, smoothed: np.ndarray, reference: tuple[np.ndarray, float, int], frame_index: int) -> np.ndarray:
-        """How much each pixel of ``smoothed`` differs from an earlier frame (grey levels)."""
+        """Where ``smoothed`` differs from an earlier frame by more than ``motion_threshold`` grey
+        levels: 255 there, 0 elsewhere."""
         image, _, reference_frame = reference
         if self.camera is not None:  # the reference as the camera stands now: the background still
             matrix = self.camera.between(reference_frame, frame_index, self.scale)
             image = cv2.warpAffine(image, matrix, (image.shape[1], image.shape[0]), flags=cv2.INTER_LINEAR,
                                    borderMode=cv2.BORDER_REPLICATE)
-        return cv2.absdiff(smoothed, image)
+        # on whole grey levels, "over the threshold" is over its whole part, as OpenCV takes it
+        return cv2.threshold(cv2.absdiff(smoothed, image), self.config.motion_threshold, 255, cv2.THRESH_BINARY)[1]
 
     def _drop_outline(self, moving: np.ndarray) -> None:
         """Drop points whose tracking window reaches into static pixels.
@@ -518,18 +523,24 @@ class CornerTracker:
         self._points, self._ids, self._velocity = self._points[keep], self._ids[keep], self._velocity[keep]
         self._anchor, self._anchor_time = self._anchor[keep], self._anchor_time[keep]
 
-    def _near_points(self) -> np.ndarray:
-        """Boolean image: pixels within ``min_distance_px`` of a live point (no seeding there)."""
-        marks = np.zeros(self._seed_mask.shape, np.uint8)
+    def _near_points(self, box: tuple[int, int, int, int]) -> np.ndarray:
+        """255 on the pixels of ``box`` (left, top, width, height) within ``min_distance_px`` of a
+        live point (no seeding there), 0 elsewhere: the points' marks dilated by a disk, on the
+        box and a disk's reach around it only (the same pixels as on the whole image)."""
+        left, top, box_w, box_h = box
+        radius = max(1, int(self.config.min_distance_px))
+        height, width = self._seed_mask.shape
+        x0, y0 = max(0, left - radius), max(0, top - radius)
+        x1, y1 = min(width, left + box_w + radius), min(height, top + box_h + radius)
+        marks = np.zeros((y1 - y0, x1 - x0), np.uint8)
         if len(self._points):
-            height, width = marks.shape
-            x = np.clip(np.rint(self._points[:, 0]).astype(int), 0, width - 1)
-            y = np.clip(np.rint(self._points[:, 1]).astype(int), 0, height - 1)
-            marks[y, x] = 1
-            radius = max(1, int(self.config.min_distance_px))
+            x = np.clip(np.rint(self._points[:, 0]).astype(int), 0, width - 1) - x0
+            y = np.clip(np.rint(self._points[:, 1]).astype(int), 0, height - 1) - y0
+            inside = (x >= 0) & (x < x1 - x0) & (y >= 0) & (y < y1 - y0)
+            marks[y[inside], x[inside]] = 255
             disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
             marks = cv2.dilate(marks, disk)
-        return marks.astype(bool)
+        return marks[top - y0:top - y0 + box_h, left - x0:left - x0 + box_w]
 
     def _seed(self, grey: np.ndarray, time_s: float, moving: np.ndarray) -> None:
         wanted = self.config.max_points - len(self._points)
@@ -540,17 +551,23 @@ class CornerTracker:
         shape = (self.config.win_width_px | 1, self.config.win_height_px | 1)
         inner = cv2.erode(moving, cv2.getStructuringElement(cv2.MORPH_RECT, shape))
         mask = cv2.bitwise_and(cv2.bitwise_and(inner, self._seed_mask), self._static_mask)
-        mask[self._near_points()] = 0
+        box = cv2.boundingRect(mask)
+        if box[2] == 0 or box[3] == 0:
+            return
+        # not near the live points: taken off the box only (a mask of 0 and 255), which it can only shrink
+        left, top, box_w, box_h = box
+        mask = cv2.subtract(mask[top:top + box_h, left:left + box_w], self._near_points(box))
         # corner detection costs in proportion to the area searched: search the moving box only
-        left, top, box_w, box_h = cv2.boundingRect(mask)
+        inner_left, inner_top, box_w, box_h = cv2.boundingRect(mask)
         if box_w == 0 or box_h == 0:
             return
+        left, top = left + inner_left, top + inner_top
         corners = cv2.goodFeaturesToTrack(
             grey[top:top + box_h, left:left + box_w],
             maxCorners=wanted,
             qualityLevel=self.config.quality_level,
             minDistance=self.config.min_distance_px,
-            mask=mask[top:top + box_h, left:left + box_w],
+            mask=mask[inner_top:inner_top + box_h, inner_left:inner_left + box_w],
             blockSize=5,
         )
         if corners is None:
