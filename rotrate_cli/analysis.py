@@ -43,7 +43,7 @@ from rotrate_cli.geometry import Geometry, locate, measure, settle_view
 from rotrate_cli.lazy import pandas as pd
 from rotrate_cli.memory import release_free_memory
 from rotrate_cli.outliers import FEATURE_COLUMNS, Combined, RejectionConfig
-from rotrate_cli.period import Period, find_period
+from rotrate_cli.period import Period, Thumbnails, find_period
 from rotrate_cli.pools import pipeline_threads
 from rotrate_cli.rates import Camera
 from rotrate_cli.reasons import name_rejections, track_places
@@ -215,9 +215,10 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     if config.segment:
         return _segmented(footage, config)
     with ThreadPoolExecutor(max_workers=1, thread_name_prefix="rotrate-repetition") as pool:
-        # the clip's repetition (from the thumbnails alone) is worked out beside the axis's search,
-        # on the core that decoding left idle: it is first wanted where the lens is chosen
-        repetition = pool.submit(_repetition, footage, config)
+        # the clip's repetition (from the thumbnails alone) is worked out beside the axis's search
+        # and the first fit, on the core that decoding left idle: it is first wanted where the
+        # lens is chosen, else where a found axis is moved (the first fit does not wait for it)
+        repetition = pool.submit(_repetition, footage.thumbnails, footage.info.clock_resolution_s, config)
         kept = _kept_tracks(tracks, footage.camera) if config.keep_tracks else None
         view_tracks = keep_for_view(tracks)  # the view is read at the rate reported, once it is known
         places = track_places(tracks)  # where each track lies: to name why the rejected were
@@ -231,12 +232,12 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
             return _repetition_only(footage, repetition.result(), config, kept, view_tracks)
         finally:
             footage.keyframes.clear()
+        footage = replace(footage, tracks=tracks.iloc[:0])
+        del tracks  # the offsets hold what is needed: a long clip's positions need not stay
+        release_free_memory()
+        geometry, result = measure(body, geometry, config, size_px, steady=lambda: repetition.result() is not None)
         period = repetition.result()
     footage.thumbnails.clear()
-    footage = replace(footage, tracks=tracks.iloc[:0])
-    del tracks  # the offsets hold what is needed: a long clip's positions need not stay
-    release_free_memory()
-    geometry, result = measure(body, geometry, config, size_px, steady=period is not None)
     del body
     result = replace(result, features=name_rejections(result.features, places, geometry.fixation_px,
                                                       geometry.axis_angle_deg, result.combined.omega_rad_s,
@@ -266,14 +267,14 @@ def _kept_tracks(tracks: pd.DataFrame, camera: CameraPath | None = None) -> pd.D
     return kept if camera is None else camera.seen(kept)
 
 
-def _repetition(footage: Footage, config: AnalysisConfig) -> Period | None:
+def _repetition(thumbnails: Thumbnails, clock_resolution_s: float, config: AnalysisConfig) -> Period | None:
     """The clip's repetition (:mod:`rotrate_cli.period`) where it can stand for the body's turn:
     the fit method on automatic points (chosen points and the paper's method are measured as
-    they are; several bodies do not repeat as one)."""
+    they are; several bodies do not repeat as one). Given the thumbnails alone, not the footage,
+    so that the tracks can be let go of while it runs."""
     if config.method != "fit" or config.points_px or config.segment:
         return None
-    thumbnails = footage.thumbnails
-    return find_period(thumbnails.times_s, thumbnails.images, footage.info.clock_resolution_s)
+    return find_period(thumbnails.times_s, thumbnails.images, clock_resolution_s)
 
 
 def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checked: Checked, period: Period | None,

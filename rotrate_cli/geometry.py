@@ -257,10 +257,12 @@ def prepare_body(tracks: pd.DataFrame, angle: float, fixation: tuple[float, floa
 
 
 def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size_px: tuple[int, int],
-            steady: bool = False) -> tuple[Geometry, RateResult]:
+            steady: bool | Callable[[], bool] = False) -> tuple[Geometry, RateResult]:
     """Step 2: the body's rates, with a found fixation refined (see the module's notes).
     ``steady``: the rate is known not to change (the clip repeats itself), so a spin-up is not
-    looked for (it costs two more fits: 0.4 s of the record clip's 45,000 tracks)."""
+    looked for (it costs two more fits: 0.4 s of the record clip's 45,000 tracks); a callable is
+    asked only after the first fit, and only where a found fixation is refined (the clip's
+    repetition, worked out in another thread, is not waited for before)."""
     first = geometry.fixation_px
     angle = geometry.axis_angle_deg
 
@@ -274,6 +276,7 @@ def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size
     release_free_memory()
     fixation = first
     if geometry.fixation_found and config.method == "fit":
+        steady = steady() if callable(steady) else steady
         # the axis is refined even where the clip's repetition gives the rate: the sense of
         # turning is the tracks' (without it, one EPFL car's sense came out wrong)
         # where the clip's repetition gives the rate, the axis gives only the sense of turning and

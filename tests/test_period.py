@@ -254,3 +254,35 @@ def test_a_light_flickering_with_the_mains_is_not_taken_for_the_turn() -> None:
     found = find_period(flickering.times_s, flickering.images)
     assert found is not None
     assert found.period_s == pytest.approx(3.1416, rel=0.005)
+
+
+@pytest.mark.parametrize("fixation_px", [(319.5, 179.5), None])
+def test_the_first_fit_does_not_wait_for_the_clips_repetition(monkeypatch, fixation_px) -> None:
+    """The repetition, worked out in its own thread, is first waited for where the lens is
+    sought (not with --fov ortho or a lens given), else where a found axis is moved, after the
+    first fit: that fit runs beside it. The repetition here waits (at most 20 s) for the first fit
+    to start; had the fit waited for it, the two would have sat out the 20 s."""
+    import threading
+    from pathlib import Path
+
+    from rotrate_cli import analysis, fits
+
+    fitting = threading.Event()
+    fit_first = fits.rates_from_offsets
+
+    def noted(*args, **kwargs):
+        fitting.set()
+        return fit_first(*args, **kwargs)
+
+    find_first = analysis.find_period
+
+    def waiting(*args, **kwargs):
+        assert fitting.wait(timeout=20.0), "the first fit waited for the repetition"
+        return find_first(*args, **kwargs)
+
+    monkeypatch.setattr(analysis, "find_period", waiting)
+    monkeypatch.setattr("rotrate_cli.geometry.rates_from_offsets", noted)
+    clip = Path(__file__).resolve().parents[1] / "sample_videos" / "box_ortho.mp4"
+    result = analysis.analyze(clip, analysis.AnalysisConfig(fixation_px=fixation_px, find_focal=False))
+    assert fitting.is_set()
+    assert result.omega_rad_s == pytest.approx(0.6, rel=0.02)
