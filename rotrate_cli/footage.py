@@ -226,6 +226,8 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
         tracker = replace(tracker, retry_lost=not info.is_image_sequence)
     if tracker.predict_new is None:
         tracker = replace(tracker, predict_new=not info.is_image_sequence)
+    if tracker.laid_along_rows is None:
+        tracker = replace(tracker, laid_along_rows=not info.is_image_sequence)
     if tracker.steady_light is None:
         tracker = replace(tracker, steady_light=not info.is_image_sequence)
     thumbnails.steady_light = not info.is_image_sequence

@@ -253,20 +253,12 @@ def test_the_tracking_scale_goes_by_the_longer_side() -> None:
     assert tracking_scale((128, 96), config) == 3.0
 
 
-def test_a_tall_window_is_followed_on_the_transposed_images_to_the_same_places(sphere, monkeypatch) -> None:
+def test_a_tall_window_is_followed_on_the_transposed_images_to_the_same_places(sphere) -> None:
     """The 5x21 window runs on the transposed frames as 21x5 (OpenCV's vector steps go along the
     rows): the same tracks as the window as given, to float rounding."""
     _, frames = sphere
-    laid = track_frames(frames, (320, 180), TrackerConfig()).tracks
-
-    def as_given(self, frame_size_px, config):
-        original(self, frame_size_px, config)
-        self._transposed = False
-        self._lk["winSize"] = (config.win_width_px, config.win_height_px)
-
-    original = KltTracker.__init__
-    monkeypatch.setattr(KltTracker, "__init__", as_given)
-    given = track_frames(frames, (320, 180), TrackerConfig()).tracks
+    laid = track_frames(frames, (320, 180), TrackerConfig(laid_along_rows=True)).tracks
+    given = track_frames(frames, (320, 180), TrackerConfig(laid_along_rows=False)).tracks
     assert len(laid) > 1000
     assert len(laid) == pytest.approx(len(given), rel=0.002)
     joined = laid.merge(given, on=["track", "frame"], suffixes=("_laid", "_given"))
@@ -279,6 +271,35 @@ def test_a_tall_window_is_followed_on_the_transposed_images_to_the_same_places(s
 
 
 def test_a_tall_window_is_laid_along_the_rows_and_a_wide_one_is_not() -> None:
-    assert KltTracker((640, 360), TrackerConfig())._lk["winSize"] == (21, 5)
-    turned = KltTracker((640, 360), TrackerConfig(win_width_px=21, win_height_px=5))
+    laid = KltTracker((640, 360), TrackerConfig(laid_along_rows=True))
+    assert laid._lk["winSize"] == (21, 5) and laid._transposed
+    turned = KltTracker((640, 360), TrackerConfig(win_width_px=21, win_height_px=5, laid_along_rows=True))
     assert turned._lk["winSize"] == (21, 5) and not turned._transposed
+    assert not KltTracker((640, 360), TrackerConfig(laid_along_rows=False))._transposed
+
+
+def test_videos_are_followed_with_the_window_laid_along_the_rows_and_stills_as_given(monkeypatch, tmp_path) -> None:
+    """By source, as the tracker's other choices (see TrackerConfig.laid_along_rows)."""
+    from pathlib import Path
+
+    from rotrate_cli import footage
+    from rotrate_cli.config import AnalysisConfig
+
+    chosen = []
+    follow = footage.track_frames
+
+    def noted(stream, size_px, config, *args, **kwargs):
+        chosen.append(config.laid_along_rows)
+        return follow(stream, size_px, config, *args, **kwargs)
+
+    monkeypatch.setattr(footage, "track_frames", noted)
+    clip = Path(__file__).resolve().parents[1] / "sample_videos" / "box_ortho.mp4"
+    footage.read_footage(clip, AnalysisConfig(fixation_px=(319.5, 179.5), end_s=1.0))
+    capture = cv2.VideoCapture(str(clip))
+    for index in range(12):
+        ok, image = capture.read()
+        assert ok
+        cv2.imwrite(str(tmp_path / f"still{index:02d}.png"), image)
+    capture.release()
+    footage.read_footage(tmp_path, AnalysisConfig(fixation_px=(319.5, 179.5), fps=30.0))
+    assert chosen[0] is True and chosen[-1] is False
