@@ -68,6 +68,8 @@ def make_clips() -> dict[str, tuple[Path, tuple[float, float], float]]:
 
 CHILD = """
 import json, sys, time
+import rotrate_cli.cli
+rotrate_cli.cli._one_blas_thread()  # as the command's entry point does first, before NumPy loads
 started = time.perf_counter()
 mode, path, fx, fy = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
 if mode == "decode":
@@ -93,6 +95,7 @@ print(json.dumps({"frames": frames, "seconds": elapsed, "cpu_s": cpu, "omega": o
 FIRST_FRAME = """
 import sys
 import rotrate_cli.cli  # what the command line loads
+rotrate_cli.cli._one_blas_thread()  # what its entry point does first
 from rotrate_cli.analysis import analyze  # what analyze loads before it decodes
 from rotrate_cli.decode import FrameSource
 next(FrameSource(sys.argv[1]).frames(grey=True))
