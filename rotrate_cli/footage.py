@@ -46,6 +46,9 @@ ProgressCallback = Callable[[int, int | None], None]
 #: nothing from its decoder (see :meth:`rotrate_cli.period.Thumbnails.lifeless_fraction`).
 LIFELESS = 0.5
 
+#: The tracker's settings that None leaves to the source (see :class:`rotrate_cli.tracking.TrackerConfig`).
+BY_SOURCE = ("retry_lost", "predict_new", "laid_along_rows", "steady_light")
+
 #: Fewer tracks than this do not find the axis's angle from their motion: it is taken as vertical.
 MIN_TRACKS_FOR_ANGLE = 10
 
@@ -222,14 +225,9 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     blur = tracker.blur_sigma_px
     if blur is None:
         blur = 0.0 if info.is_image_sequence else VIDEO_BLUR_SIGMA_PX
-    if tracker.retry_lost is None:
-        tracker = replace(tracker, retry_lost=not info.is_image_sequence)
-    if tracker.predict_new is None:
-        tracker = replace(tracker, predict_new=not info.is_image_sequence)
-    if tracker.laid_along_rows is None:
-        tracker = replace(tracker, laid_along_rows=not info.is_image_sequence)
-    if tracker.steady_light is None:
-        tracker = replace(tracker, steady_light=not info.is_image_sequence)
+    # the tracker's choices left open (None) are made by source: on for videos, off for stills
+    tracker = replace(tracker, **{name: not info.is_image_sequence for name in BY_SOURCE
+                                  if getattr(tracker, name) is None})
     thumbnails.steady_light = not info.is_image_sequence
     # the luma table is known once the stream has read (and checked) its first frame
     frames = video.frames(config.start_s, config.end_s, grey=True, map_luma=False,
