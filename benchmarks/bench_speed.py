@@ -63,7 +63,7 @@ def make_clips() -> dict[str, tuple[Path, tuple[float, float], float]]:
         renderer = Renderer(scene)
         path = OUT / f"bench_{height}p_{int(turns * TURN_S)}s.mp4"
         if not path.exists():
-            _clip(path, turns, [renderer.render(k) for k in range(scene.frame_count)], (width, height))
+            _clip(path, turns, list(renderer.frames(range(scene.frame_count))), (width, height))
         clips[name] = (path, renderer.fixation_px, OMEGA)
     return clips
 

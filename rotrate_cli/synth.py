@@ -15,6 +15,10 @@ from __future__ import annotations
 
 import json
 import math
+import os
+from collections import deque
+from collections.abc import Iterable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -30,6 +34,9 @@ _CYLINDER = (0.8, 0.95)  # radius, half-height
 _SPHERE_RADIUS = 1.0
 _TEXTURE_EXTENT = 1.25  # the solid texture covers [-extent, extent]^3 in object units
 _LIGHT = np.array([-0.45, 0.55, 1.0]) / np.linalg.norm([-0.45, 0.55, 1.0])
+#: The cylinder about its axis that each shape sweeps as it turns (radius, half-height), object units.
+_SWEPT = {"box": (math.hypot(_BOX_HALF[0], _BOX_HALF[2]), _BOX_HALF[1]), "cylinder": _CYLINDER,
+          "sphere": (_SPHERE_RADIUS, _SPHERE_RADIUS)}
 
 
 @dataclass(frozen=True)
@@ -162,12 +169,21 @@ class Renderer:
         tints = {"box": (0.55, 0.75, 1.0), "cylinder": (0.5, 1.0, 0.7), "sphere": (1.0, 0.8, 0.55)}
         self._bodies = [_Body(scene.shape, scene.omega_rad_s, scene.alpha_rad_s2, scene.axis_offset_px / self._scale,
                               self._solid_texture(rng), np.array(tints[scene.shape]))]
+        self._rays: list[np.ndarray] = []
         self._background = self._background_image(rng)
         self._noise_seed = int(rng.integers(0, 2**31))
         if scene.second_shape is not None:
             self._bodies.append(_Body(scene.second_shape, scene.second_omega_rad_s, 0.0,
                                       scene.second_axis_offset_px / self._scale, self._solid_texture(rng),
                                       np.array(tints[scene.second_shape])[::-1]))
+        # the rays that can meet each body at all, those through the cylinder it sweeps as it
+        # turns (the same in every frame, and a little widened): most of a frame is background,
+        # and the rays that miss it are left out of the intersections (the same pixels)
+        for body in self._bodies:
+            radius, half = _SWEPT[body.shape]
+            centred = self._origin - np.array([body.axis_x, 0.0, 0.0])
+            meets, _ = self._intersect("cylinder", centred, self._direction, (1.01 * radius, 1.01 * half))
+            self._rays.append(np.flatnonzero(np.isfinite(meets)))
 
     def axis_px(self, axis_offset_px: float) -> tuple[float, float]:
         """The pixel where the axis at ``axis_offset_px`` (at the object's mid-height) appears."""
@@ -197,8 +213,10 @@ class Renderer:
         return np.stack([grey * 0.95, grey * 0.9, grey * 0.8], axis=-1)
 
     @staticmethod
-    def _intersect(shape: str, origin: np.ndarray, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Distance to the first hit (inf where none) and the surface normal, in object coordinates."""
+    def _intersect(shape: str, origin: np.ndarray, direction: np.ndarray,
+                   cylinder: tuple[float, float] = _CYLINDER) -> tuple[np.ndarray, np.ndarray]:
+        """Distance to the first hit (inf where none) and the surface normal, in object coordinates
+        (``cylinder``: the radius and half-height of a cylinder)."""
         n = len(origin)
         normal = np.zeros((n, 3))
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -210,7 +228,7 @@ class Renderer:
                 hit = origin + t[:, None] * direction
                 normal = hit / _SPHERE_RADIUS
             elif shape == "cylinder":
-                radius, half = _CYLINDER
+                radius, half = cylinder
                 a = direction[:, 0] ** 2 + direction[:, 2] ** 2
                 b = origin[:, 0] * direction[:, 0] + origin[:, 2] * direction[:, 2]
                 c = origin[:, 0] ** 2 + origin[:, 2] ** 2 - radius**2
@@ -246,31 +264,48 @@ class Renderer:
                 normal[np.arange(n), axis] = -np.sign(direction[np.arange(n), axis])
         return t, normal
 
+    def frames(self, indices: Iterable[int], workers: int | None = None) -> Iterator[np.ndarray]:
+        """The BGR frames ``indices``, in order, rendered a few ahead on ``workers`` threads (the
+        cores by default): NumPy and SciPy let go of the interpreter in their array work, and
+        each frame is rendered on its own, so the frames are those :meth:`render` gives."""
+        workers = workers if workers is not None else max(1, min(4, os.cpu_count() or 1))
+        if workers == 1:
+            yield from (self.render(index) for index in indices)
+            return
+        with ThreadPoolExecutor(workers, thread_name_prefix="rotrate-render") as pool:
+            pending: deque[Future[np.ndarray]] = deque()
+            for index in indices:
+                pending.append(pool.submit(self.render, index))
+                if len(pending) > 2 * workers:  # a few ahead, not the whole clip in memory
+                    yield pending.popleft().result()
+            while pending:
+                yield pending.popleft().result()
+
     def render(self, index: int) -> np.ndarray:
         """The BGR uint8 frame ``index``."""
         scene = self.scene
         time_s = index / scene.fps
         image = self._background.reshape(-1, 3).copy()
         nearest = np.full(len(self._origin), np.inf)
-        for body in self._bodies:
+        for body, rays in zip(self._bodies, self._rays, strict=True):
             angle = scene.start_angle_rad + body.omega_rad_s * time_s + 0.5 * body.alpha_rad_s2 * time_s**2
             cos_a, sin_a = math.cos(angle), math.sin(angle)
             # object-from-world rotation R_y(-angle), applied to row vectors
             to_object = np.array([[cos_a, 0.0, sin_a], [0.0, 1.0, 0.0], [-sin_a, 0.0, cos_a]])
-            shifted = self._origin - np.array([body.axis_x, 0.0, 0.0])  # object frame centred on its axis
+            shifted = self._origin[rays] - np.array([body.axis_x, 0.0, 0.0])  # object frame centred on its axis
             origin = shifted @ to_object
-            direction = self._direction @ to_object
+            direction = self._direction[rays] @ to_object
             t, normal = self._intersect(body.shape, origin, direction)
-            hit = np.isfinite(t) & (t < nearest)
+            hit = np.isfinite(t) & (t < nearest[rays])
             if not hit.any():
                 continue
-            nearest[hit] = t[hit]
+            nearest[rays[hit]] = t[hit]
             points = origin[hit] + t[hit, None] * direction[hit]
             coords = (points + _TEXTURE_EXTENT) / (2 * _TEXTURE_EXTENT) * (body.texture.shape[0] - 1)
             albedo = ndimage.map_coordinates(body.texture, coords.T, order=1, mode="nearest")
             world_normal = normal[hit] @ to_object.T
             shade = 0.6 + 0.4 * np.clip(world_normal @ _LIGHT, 0.0, 1.0)
-            image[hit] = (albedo * shade)[:, None] * body.tint[None, :]
+            image[rays[hit]] = (albedo * shade)[:, None] * body.tint[None, :]
         image = image.reshape(*self._shape_ss, 3)
         ss = scene.supersample
         small = cv2.resize(image.astype(np.float32), (scene.width_px, scene.height_px),
@@ -332,8 +367,8 @@ def write_clip(scene: SceneConfig, path: str | Path, force: bool = False) -> dic
     if not writer.isOpened():
         raise OutputError(f"could not open a video writer for {path}")
     try:
-        for index in range(scene.frame_count):
-            writer.write(renderer.render(index))
+        for frame in renderer.frames(range(scene.frame_count)):
+            writer.write(frame)
     except BaseException:
         writer.release()
         partial.unlink(missing_ok=True)

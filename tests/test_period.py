@@ -231,8 +231,8 @@ def test_a_fast_box_is_measured_from_its_returns_and_marked_weak(tmp_path) -> No
     renderer = Renderer(scene)
     clip = tmp_path / "fast_box.mp4"
     writer = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"mp4v"), scene.fps, (scene.width_px, scene.height_px))
-    for k in range(scene.frame_count):
-        writer.write(renderer.render(k))
+    for frame in renderer.frames(range(scene.frame_count)):
+        writer.write(frame)
     writer.release()
     result = analyze(clip, AnalysisConfig(fixation_px=None))
     assert result.omega_rad_s == pytest.approx(15.0, rel=0.01)

@@ -92,8 +92,8 @@ def test_a_clip_that_opens_on_another_picture_is_measured_on_its_turning(tmp_pat
     writer = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"mp4v"), scene.fps, (scene.width_px, scene.height_px))
     for _ in range(1 if opening == "still" else 15):
         writer.write(still if opening == "still" else np.zeros_like(still))
-    for index in range(scene.frame_count):
-        writer.write(renderer.render(index))
+    for frame in renderer.frames(range(scene.frame_count)):
+        writer.write(frame)
     writer.release()
     result = analyze(clip, AnalysisConfig(fixation_px=None))
     assert result.omega_rad_s == pytest.approx(0.8, rel=0.01)
@@ -144,9 +144,9 @@ def test_a_clip_that_fades_in_is_measured_once_its_light_is_steady(tmp_path, ove
     clip = tmp_path / "faded.mp4"
     writer = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"mp4v"), scene.fps, (scene.width_px, scene.height_px))
     start = 0.0 if over_frames == 20 else 0.3
-    for index in range(scene.frame_count):
+    for index, frame in enumerate(renderer.frames(range(scene.frame_count))):
         light = min(1.0, start + (1.0 - start) * index / over_frames)
-        writer.write((renderer.render(index) * light).astype(np.uint8))
+        writer.write((frame * light).astype(np.uint8))
     writer.release()
     result = analyze(clip, AnalysisConfig(fixation_px=None))
     assert result.omega_low_rad_s <= 0.6 <= result.omega_high_rad_s

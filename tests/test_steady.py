@@ -88,10 +88,10 @@ def test_a_shaken_render_is_measured_as_from_a_tripod(tmp_path: Path) -> None:
     clip = tmp_path / "shaken.mp4"
     size = (scene.width_px, scene.height_px)
     writer = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"mp4v"), scene.fps, size)
-    for k in range(scene.frame_count):
+    for k, frame in enumerate(renderer.frames(range(scene.frame_count))):
         matrix = cv2.getRotationMatrix2D((size[0] / 2, size[1] / 2), math.degrees(turn[k]), 1.0)
         matrix[:, 2] += shift[k]
-        writer.write(cv2.warpAffine(renderer.render(k), matrix, size, borderMode=cv2.BORDER_REPLICATE))
+        writer.write(cv2.warpAffine(frame, matrix, size, borderMode=cv2.BORDER_REPLICATE))
     writer.release()
     result = analyze(clip, AnalysisConfig(fixation_px=None))
     assert result.omega_rad_s == pytest.approx(0.5, rel=0.01)

@@ -28,7 +28,8 @@ def sphere() -> tuple[Renderer, list[Frame]]:
     scene = SceneConfig(shape="sphere", omega_rad_s=0.8, duration_s=2.0, width_px=320, height_px=180,
                         supersample=1, seed=5)
     renderer = Renderer(scene)
-    frames = [Frame(k, k / scene.fps, tracking_image(renderer.render(k), 1.0)) for k in range(scene.frame_count)]
+    frames = [Frame(k, k / scene.fps, tracking_image(image, 1.0))
+              for k, image in enumerate(renderer.frames(range(scene.frame_count)))]
     return renderer, frames
 
 
@@ -68,7 +69,7 @@ def test_reduced_tracking_image_reports_full_resolution(sphere: tuple[Renderer, 
     renderer, _ = sphere
     scene = renderer.scene
     config = TrackerConfig(track_size_px=160)
-    frames = [Frame(k, k / scene.fps, tracking_image(renderer.render(k), 0.5)) for k in range(30)]
+    frames = [Frame(k, k / scene.fps, tracking_image(image, 0.5)) for k, image in enumerate(renderer.frames(range(30)))]
     run = track_frames(frames, (320, 180), config)
     assert run.tracks["x_px"].max() > 160  # positions are scaled back to the 320-px frame
 
@@ -147,9 +148,9 @@ def test_a_light_flickering_with_the_mains_leaves_the_rate_as_it_was(tmp_path) -
     renderer = Renderer(scene)
     clip = tmp_path / "flicker.mp4"
     writer = cv2.VideoWriter(str(clip), cv2.VideoWriter_fourcc(*"mp4v"), scene.fps, (scene.width_px, scene.height_px))
-    for k in range(scene.frame_count):
+    for k, frame in enumerate(renderer.frames(range(scene.frame_count))):
         gain = 1 + 0.3 * math.sin(2 * math.pi * 10 * k / scene.fps)
-        writer.write(np.clip(renderer.render(k).astype(np.float32) * gain, 0, 255).astype(np.uint8))
+        writer.write(np.clip(frame.astype(np.float32) * gain, 0, 255).astype(np.uint8))
     writer.release()
     result = analyze(clip, AnalysisConfig(fixation_px=None))
     assert result.omega_rad_s == pytest.approx(0.5, rel=0.01)
