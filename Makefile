@@ -19,7 +19,7 @@ demo: $(STAMP)
 
 ## test: the default suite (unit, CLI, sample-clip regression, paper Table I, dinosaur)
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q --numprocesses=auto --maxprocesses=4
 
 ## test-slow: longer suites (rendering on the fly, long clips)
 test-slow: $(STAMP)
