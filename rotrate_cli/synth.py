@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from collections import deque
 from collections.abc import Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -28,6 +27,7 @@ from scipy import ndimage
 
 from rotrate_cli.choices import PROJECTIONS, SHAPES  # noqa: F401 - re-exported
 from rotrate_cli.errors import InputError, OutputError
+from rotrate_cli.pools import available_cores
 
 _BOX_HALF = np.array([0.85, 0.95, 0.6])
 _CYLINDER = (0.8, 0.95)  # radius, half-height
@@ -268,7 +268,7 @@ class Renderer:
         """The BGR frames ``indices``, in order, rendered a few ahead on ``workers`` threads (the
         cores by default): NumPy and SciPy let go of the interpreter in their array work, and
         each frame is rendered on its own, so the frames are those :meth:`render` gives."""
-        workers = workers if workers is not None else max(1, min(4, os.cpu_count() or 1))
+        workers = workers if workers is not None else min(4, available_cores())
         if workers == 1:
             yield from (self.render(index) for index in indices)
             return
