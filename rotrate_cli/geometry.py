@@ -275,16 +275,17 @@ def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size
     result, camera = measured(first)
     release_free_memory()
     fixation = first
-    if geometry.fixation_found and config.method == "fit":
-        steady = steady() if callable(steady) else steady
+    refine = geometry.fixation_found and config.method == "fit"
+    known_steady = refine and (steady() if callable(steady) else steady)  # asked here, once, after the first fit
+    if refine:
         # the axis is refined even where the clip's repetition gives the rate: the sense of
         # turning is the tracks' (without it, one EPFL car's sense came out wrong)
         # where the clip's repetition gives the rate, the axis gives only the sense of turning and
         # the view: two moves (the second a secant one) come within a pixel (the record clip: 0.6
         # px), and each further one costs a fit of all its tracks (45,000 on the record clip)
         fixation, result, camera = _refine_fixation(result, camera, fixation, angle, measured,
-                                                    steps=STEADY_REFINE_STEPS if steady else REFINE_STEPS)
-        change = None if steady else half_rates(result, config, camera)
+                                                    steps=STEADY_REFINE_STEPS if known_steady else REFINE_STEPS)
+        change = None if known_steady else half_rates(result, config, camera)
         if change is not None and changes(result.combined, *change):
             # a spinning-up body: one rate for all tracks misplaces the axis; the turn's angle
             # as it speeds up (from the halves' rates) does not. Once: measuring the halves again
@@ -293,7 +294,7 @@ def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size
             if moved[1].combined.tracks_used >= SPIN_UP_KEEPS * result.combined.tracks_used:
                 fixation, result, camera = moved
     spread = None
-    if geometry.fixation_found and config.method == "fit" and not steady:
+    if refine and not known_steady:
         spread = _axis_spread(result, camera, fixation, angle, measured)
     return replace(geometry, fixation_px=(float(fixation[0]), float(fixation[1])), axis_spread=spread), result
 

@@ -650,7 +650,7 @@ class KltTracker(CornerTracker):
     def _move(self, grey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         before, after = self._as_followed(self._prev), self._as_followed(grey)
         # Points with a known velocity start from a constant-velocity prediction, close to the
-        # answer, so one pyramid level above the base suffices; new points search the full pyramid.
+        # answer, so the base level (KNOWN_LEVELS) suffices; new points search the full pyramid.
         # The backward pass starts from the same prediction reversed, independent of the forward
         # answer, so a wrong forward match is not confirmed by starting next to it.
         known = np.any(self._velocity != 0, axis=1)
