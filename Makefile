@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
+.PHONY: docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -36,8 +36,14 @@ $(FLOOR)/.installed: pyproject.toml constraints/floor.txt
 test-floor: $(FLOOR)/.installed
 	$(FLOOR)/bin/python -m pytest -q tests/test_decode.py tests/test_cli.py tests/test_cli_polish.py tests/test_samples.py tests/test_rates.py tests/test_view.py tests/test_real_files.py
 
+## docs: docs/cli.md made again from the commands' help (tests/test_docs.py fails when it is stale)
+docs: $(STAMP)
+	COLUMNS=100 $(BIN)/python -m typer rotrate_cli.cli utils docs --name rotrate > docs/cli.md
+
+## lint: ruff, and the import contracts that keep machinery below the stages (import-linter, pyproject.toml)
 lint: $(STAMP)
 	$(BIN)/ruff check rotrate_cli tests benchmarks
+	$(BIN)/lint-imports
 
 ## bench: analyze vs decode-only time at 720p and 1080p and on the real record clip, start-up, and peak memory for a clip and one 4x as long
 bench: $(STAMP)

@@ -39,8 +39,8 @@ sys.path.insert(0, str(ROOT))
 
 from rotrate_cli import AnalysisConfig, analyze  # noqa: E402
 from rotrate_cli.analysis import rates_from_offsets, thin  # noqa: E402
-from rotrate_cli.outliers import RejectionConfig  # noqa: E402
-from rotrate_cli.synth import SceneConfig, write_clip  # noqa: E402
+from rotrate_cli.fitting.outliers import RejectionConfig  # noqa: E402
+from rotrate_cli.video.synth import SceneConfig, write_clip  # noqa: E402
 
 OUT = ROOT / "bench_out" / "accuracy"
 PAPER_STEP_S = 16 / 30  # the paper sampled every 16th frame of a 30 fps video

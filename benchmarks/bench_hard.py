@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.scoring import print_scored, scored  # noqa: E402
-from rotrate_cli.synth import Renderer, SceneConfig  # noqa: E402
+from rotrate_cli.video.synth import Renderer, SceneConfig  # noqa: E402
 
 OUT = ROOT / "bench_out" / "hard"
 

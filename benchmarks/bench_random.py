@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.scoring import print_scored, scored  # noqa: E402
-from rotrate_cli.synth import SceneConfig, write_clip  # noqa: E402
+from rotrate_cli.video.synth import SceneConfig, write_clip  # noqa: E402
 
 OUT = ROOT / "bench_out" / "random"
 

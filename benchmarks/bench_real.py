@@ -117,7 +117,7 @@ def turn_in_parts() -> list[Case]:
     """Every EPFL car's turn in parts (:data:`PART_PHOTOGRAPHS` from every :data:`PART_EVERY`-th
     photograph), in rad/s from their EXIF times, each part from its first photograph's time to its
     last's: the tracks alone mostly, a third of a turn to half of one through a wide lens."""
-    from rotrate_cli.clock import exif_times
+    from rotrate_cli.video.clock import exif_times
 
     found: list[Case] = []
     for folder in sorted((DATA / "epfl_cars").glob("seq*")):

@@ -33,8 +33,8 @@ import cv2
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from rotrate_cli.pools import available_cores  # noqa: E402
-from rotrate_cli.synth import Renderer, SceneConfig  # noqa: E402
+from rotrate_cli.runtime.pools import available_cores  # noqa: E402
+from rotrate_cli.video.synth import Renderer, SceneConfig  # noqa: E402
 
 OUT = ROOT / "bench_out"
 RECORD = ROOT.parent / "shared" / "data" / "real_videos" / "record_oblique_closeup.mp4"
@@ -75,7 +75,7 @@ rotrate_cli.cli._one_blas_thread()  # as the command's entry point does first, b
 started = time.perf_counter()
 mode, path, fx, fy = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
 if mode == "decode":
-    from rotrate_cli.decode import FrameSource
+    from rotrate_cli.video.decode import FrameSource
 else:
     from rotrate_cli.analysis import AnalysisConfig, analyze
     import pandas, scipy.special  # loaded on first use in a run: here, so that the stages alone are timed
@@ -99,7 +99,7 @@ import sys
 import rotrate_cli.cli  # what the command line loads
 rotrate_cli.cli._one_blas_thread()  # what its entry point does first
 from rotrate_cli.analysis import analyze  # what analyze loads before it decodes
-from rotrate_cli.decode import FrameSource
+from rotrate_cli.video.decode import FrameSource
 next(FrameSource(sys.argv[1]).frames(grey=True))
 """
 
@@ -142,7 +142,7 @@ def long_clips() -> int:
     """Peak memory and time of ``analyze --fixation auto`` on 640x480 clips of 1, 10 and 30 minutes
     (a rendered 4-s turn of a box, looped by stream copy: a real clip of that length). Target: the
     30-minute clip under 500 MB, and growth under 5 MB a minute."""
-    from rotrate_cli.pipe import ffmpeg_program
+    from rotrate_cli.video.pipe import ffmpeg_program
 
     program = ffmpeg_program()
     if program is None:

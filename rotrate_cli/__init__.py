@@ -7,7 +7,8 @@ One call does the whole job::
     print(result.omega_rad_s, result.omega_low_rad_s, result.omega_high_rad_s)
 
 The library never prints or exits; it raises :class:`InputError` (bad input) and
-:class:`NoResultError` (no trustworthy result), both :class:`RotrateError`.
+:class:`NoResultError` (no trustworthy result), both :class:`RotrateError`; a
+:class:`SettingError` (an :class:`InputError`) names the setting at fault. See docs/api.md.
 """
 
 from __future__ import annotations
@@ -17,22 +18,24 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze, analyze_tracks
-    from rotrate_cli.errors import InputError, NoResultError, OutputError, RotrateError
-    from rotrate_cli.outliers import RejectionConfig
-    from rotrate_cli.tracking import Roi, TrackerConfig
-    from rotrate_cli.tracks_io import read_tracks
+    from rotrate_cli.errors import InputError, NoResultError, OutputError, RotrateError, SettingError
+    from rotrate_cli.fitting.outliers import RejectionConfig
+    from rotrate_cli.tracking.klt import Roi, TrackerConfig
+    from rotrate_cli.tracking.tracks_io import read_tracks
 
 #: Where each public name lives: imported when first used, so that the command line's start
 #: (``rotrate --help``) does not pay for OpenCV, pandas and SciPy.
 _HOMES = {
     "Analysis": "analysis", "AnalysisConfig": "analysis", "analyze": "analysis", "analyze_tracks": "analysis",
     "InputError": "errors", "NoResultError": "errors", "OutputError": "errors", "RotrateError": "errors",
-    "RejectionConfig": "outliers", "Roi": "tracking", "TrackerConfig": "tracking", "read_tracks": "tracks_io",
+    "SettingError": "errors",
+    "RejectionConfig": "fitting.outliers", "Roi": "tracking.klt", "TrackerConfig": "tracking.klt",
+    "read_tracks": "tracking.tracks_io",
 }
 
 __all__ = [
     "Analysis", "AnalysisConfig", "InputError", "NoResultError", "OutputError", "RejectionConfig", "Roi",
-    "RotrateError", "TrackerConfig", "analyze", "analyze_tracks", "read_tracks",
+    "RotrateError", "SettingError", "TrackerConfig", "analyze", "analyze_tracks", "read_tracks",
 ]
 __version__ = "0.1.0"
 

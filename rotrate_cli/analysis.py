@@ -3,13 +3,13 @@
 A composition of stages, top to bottom, each a function of its own module taking the previous
 stage's result:
 
-1. tracks (:func:`rotrate_cli.footage.read_footage`): decode, track, and the motion's direction;
-2. the clip's repetition (:func:`rotrate_cli.period.find_period`);
-3. geometry: camera, axis and fixation (:func:`rotrate_cli.geometry.locate`);
-4. fits, the fixation refined (:func:`rotrate_cli.geometry.measure`), rejected tracks named
-   (:mod:`rotrate_cli.reasons`) and the rate checked (:func:`rotrate_cli.doubts.check_rate`);
-5. the judged estimate (:func:`rotrate_cli.verdict.judge`), and the view at the rate reported
-   (:func:`rotrate_cli.geometry.settle_view`).
+1. tracks (:func:`rotrate_cli.stages.tracks.read_footage`): decode, track, and the motion's direction;
+2. the clip's repetition (:func:`rotrate_cli.stages.period.find_period`);
+3. geometry: camera, axis and fixation (:func:`rotrate_cli.stages.geometry.locate`);
+4. fits, the fixation refined (:func:`rotrate_cli.stages.geometry.measure`), rejected tracks named
+   (:mod:`rotrate_cli.scene.reasons`) and the rate checked (:func:`rotrate_cli.stages.checks.check_rate`);
+5. the judged estimate (:func:`rotrate_cli.stages.verdict.judge`), and the view at the rate reported
+   (:func:`rotrate_cli.stages.geometry.settle_view`).
 """
 
 from __future__ import annotations
@@ -23,12 +23,23 @@ from pathlib import Path
 
 import numpy as np
 
-from rotrate_cli.bodies import measure_bodies
-from rotrate_cli.camera import lens_from, method_name
 from rotrate_cli.config import AnalysisConfig, check_config
-from rotrate_cli.doubts import Checked, check_rate
 from rotrate_cli.errors import InputError, NoResultError
-from rotrate_cli.fits import (
+from rotrate_cli.fitting.camera import Camera
+from rotrate_cli.fitting.outliers import FEATURE_COLUMNS, Combined, RejectionConfig
+from rotrate_cli.fitting.segment import Body
+from rotrate_cli.fitting.series import rate_series
+from rotrate_cli.runtime.lazy import pandas as pd
+from rotrate_cli.runtime.memory import release_free_memory
+from rotrate_cli.runtime.pools import pipeline_threads
+from rotrate_cli.scene.focal import FocalEstimate
+from rotrate_cli.scene.reasons import name_rejections, track_places
+from rotrate_cli.scene.sense import sense_of_turning
+from rotrate_cli.scene.view import View, keep_for_view
+from rotrate_cli.stages.bodies import measure_bodies
+from rotrate_cli.stages.camera import lens_from, method_name
+from rotrate_cli.stages.checks import Checked, check_rate
+from rotrate_cli.stages.fits import (
     RateResult,
     no_result_message,
     rates_from_offsets,
@@ -37,22 +48,11 @@ from rotrate_cli.fits import (
     sample_spacing,
     thin,
 )
-from rotrate_cli.focal import FocalEstimate
-from rotrate_cli.footage import Footage, ProgressCallback, read_footage
-from rotrate_cli.geometry import Geometry, locate, measure, settle_view
-from rotrate_cli.lazy import pandas as pd
-from rotrate_cli.memory import release_free_memory
-from rotrate_cli.outliers import FEATURE_COLUMNS, Combined, RejectionConfig
-from rotrate_cli.period import Period, Thumbnails, find_period
-from rotrate_cli.pools import pipeline_threads
-from rotrate_cli.rates import Camera
-from rotrate_cli.reasons import name_rejections, track_places
-from rotrate_cli.segment import Body
-from rotrate_cli.sense import sense_of_turning
-from rotrate_cli.series import rate_series
-from rotrate_cli.steady import CameraPath, Shake
-from rotrate_cli.verdict import Verdict, judge, turns_between
-from rotrate_cli.view import View, keep_for_view
+from rotrate_cli.stages.geometry import Geometry, locate, measure, settle_view
+from rotrate_cli.stages.period import Period, Thumbnails, find_period
+from rotrate_cli.stages.tracks import Footage, ProgressCallback, read_footage
+from rotrate_cli.stages.verdict import Verdict, judge, turns_between
+from rotrate_cli.tracking.steady import CameraPath, Shake
 
 __all__ = ["Analysis", "AnalysisConfig", "ProgressCallback", "analyze", "analyze_tracks", "rates_from_offsets",
            "thin"]
@@ -78,7 +78,7 @@ class Analysis:
         direction: ``ccw``, ``cw`` or ``unknown``: seen from the top end of the axis, or as the
             picture shows it (``direction_in_picture``).
         tracks_total, tracks_used: tracks found, and tracks that went into the result.
-        features: one row per track (see :data:`rotrate_cli.outliers.FEATURE_COLUMNS`).
+        features: one row per track (see :data:`rotrate_cli.fitting.outliers.FEATURE_COLUMNS`).
         offsets: one row per track per sample: ``track, frame, time_s, offset_px``.
         rejection: the thresholds the verdicts used.
         warnings: things the user should know that did not stop the run.
@@ -91,28 +91,28 @@ class Analysis:
         elevation_deg: the camera's elevation found from the paths (``paths``) or with the
             focal length (``find_focal``); NaN otherwise.
         focal: with ``find_focal``, what the tracks said about the camera; None otherwise.
-        series: omega(t) over a sliding window (see :mod:`rotrate_cli.series`), or None.
+        series: omega(t) over a sliding window (see :mod:`rotrate_cli.fitting.series`), or None.
         bodies: with ``segment``, every rigid body measured, the headline one (most tracks)
             first; None otherwise.
         tracks: with ``keep_tracks``, the positions ``frame, time_s, track, x_px, y_px`` on
             the frames as they are (a shaken camera's too)
             (tracks numbered as the features); None otherwise.
         verdict: how the reported rate was judged from the tracks and the clip's repetition,
-            and its quality (``good``/``weak``; see :mod:`rotrate_cli.verdict`).
-        period: the clip's repetition (:mod:`rotrate_cli.period`), or None where none was seen.
+            and its quality (``good``/``weak``; see :mod:`rotrate_cli.stages.verdict`).
+        period: the clip's repetition (:mod:`rotrate_cli.stages.period`), or None where none was seen.
         clock: where the frame times came from (``container``, ``fps``, ``exif``, ``times file``;
             ``tracks`` for given tracks).
         camera_from: the camera model used: ``orthographic`` (the paper's), ``given`` (``--fov``
             or ``--focal-px``), ``exif`` (the photographs' lens) or ``found`` (``--fov auto``).
         view: the view read from the tracks' paths at the reported rate (the axis's elevation
-            out of the image plane, the turning centre; :mod:`rotrate_cli.view`), or None where
+            out of the image plane, the turning centre; :mod:`rotrate_cli.scene.view`), or None where
             too few tracks follow a turning path to tell.
         camera: the pinhole model the tracks' rates were measured through, or None
             (orthographic).
-        shake: a hand-held camera's shake, taken out of the tracks (:mod:`rotrate_cli.steady`);
+        shake: a hand-held camera's shake, taken out of the tracks (:mod:`rotrate_cli.tracking.steady`);
             None where none showed.
         direction_in_picture: True when the sense of turning is the one the tracks go round the
-            fixation in the picture (a view from above or face on: :mod:`rotrate_cli.sense`).
+            fixation in the picture (a view from above or face on: :mod:`rotrate_cli.scene.sense`).
 
     ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
     a long clip's table is large, and most reports do not need it.
@@ -155,7 +155,7 @@ class Analysis:
 
     @property
     def quality(self) -> str:
-        """``good``, or ``weak`` when the evidence is weak (see :mod:`rotrate_cli.verdict`)."""
+        """``good``, or ``weak`` when the evidence is weak (see :mod:`rotrate_cli.stages.verdict`)."""
         return self.verdict.quality if self.verdict is not None else "good"
 
     @property
@@ -192,11 +192,11 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
             return _analyze(source, config, progress, stage)
     except NoResultError as error:
         if (config.every or 1) > 1 and " short" in str(error):
-            raise NoResultError(f"{error}; --every {config.every} keeps one frame in {config.every}, which leaves "
-                                "these tracks too few samples to fit: try a smaller --every") from error
+            raise NoResultError(f"{error}; `every={config.every}` keeps one frame in {config.every}, which leaves "
+                                "these tracks too few samples to fit: try a smaller `every`") from error
         if config.tracker_kind == "csrt" and not config.points_px:
             raise NoResultError(f"{error}; CSRT loses points that jump far between frames (stills taken "
-                                "far apart, fast turns): the default --tracker klt follows those") from error
+                                "far apart, fast turns): the default `tracker_kind='klt'` follows those") from error
         raise
 
 
@@ -206,7 +206,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     if stage is not None:
         stage("fitting the tracks")
     if config.window_s is not None and config.window_s > footage.duration_s:
-        raise InputError(f"--window {config.window_s:g} s is longer than the {footage.duration_s:.2f} s analysed; "
+        raise InputError(f"`window_s={config.window_s:g}` s is longer than the {footage.duration_s:.2f} s analysed; "
                          "give a window shorter than the clip (a few seconds, about a quarter turn or more)")
     tracks = footage.tracks
     if config.every is None:
@@ -268,7 +268,7 @@ def _kept_tracks(tracks: pd.DataFrame, camera: CameraPath | None = None) -> pd.D
 
 
 def _repetition(thumbnails: Thumbnails, clock_resolution_s: float, config: AnalysisConfig) -> Period | None:
-    """The clip's repetition (:mod:`rotrate_cli.period`) where it can stand for the body's turn:
+    """The clip's repetition (:mod:`rotrate_cli.stages.period`) where it can stand for the body's turn:
     the fit method on automatic points (chosen points and the paper's method are measured as
     they are; several bodies do not repeat as one). Given the thumbnails alone, not the footage,
     so that the tracks can be let go of while it runs."""
@@ -280,7 +280,7 @@ def _repetition(thumbnails: Thumbnails, clock_resolution_s: float, config: Analy
 def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checked: Checked, period: Period | None,
             view_tracks: pd.DataFrame | None, notes: tuple[str, ...] = (), **extra: object) -> Analysis:
     """The Analysis: the reported rate judged from the checked tracks' rate and the clip's
-    repetition (:func:`rotrate_cli.verdict.judge`), and the view read at it. NoResultError when
+    repetition (:func:`rotrate_cli.stages.verdict.judge`), and the view read at it. NoResultError when
     neither gave a rate."""
     result = checked.result
     combined = result.combined
@@ -336,7 +336,7 @@ def _repetition_only(footage: Footage, period: Period, config: AnalysisConfig, k
                             (math.nan, math.nan), config.fixation_px is None, lens_from(config, footage.info))
     geometry = replace(geometry, fixation_px=(float(fixation[0]), float(fixation[1])))
     hint = ("; CSRT loses points that jump far between frames (stills taken far apart, fast turns): the default "
-            "--tracker klt follows those") if config.tracker_kind == "csrt" else ""
+            "`tracker_kind='klt'` follows those") if config.tracker_kind == "csrt" else ""
     note = ("no track gave a rate: the rate is the clip's repetition alone, and the sense of turning "
             f"is unknown{hint}")
     return _result(footage, config, geometry, Checked(empty), period, view_tracks, notes=(note,),
@@ -344,7 +344,7 @@ def _repetition_only(footage: Footage, period: Period, config: AnalysisConfig, k
 
 
 def _segmented(footage: Footage, config: AnalysisConfig) -> Analysis:
-    """Group the tracks into rigid bodies (:mod:`rotrate_cli.bodies`) and measure each; the
+    """Group the tracks into rigid bodies (:mod:`rotrate_cli.stages.bodies`) and measure each; the
     largest measured body is the analysis's headline result, all are in ``bodies``."""
     found = measure_bodies(footage.tracks, footage.motion_angle_deg, config, footage.info)
     return _result(footage, config, found.geometry, Checked(found.result), None, None, notes=found.notes,
@@ -384,15 +384,15 @@ def analyze_tracks(
     every = 1 if every is None else every  # given tracks are taken as sampled
     check_config(AnalysisConfig(fixation_px=(fixation, 0.0), fps=fps, every=every, method=method))
     if not math.isfinite(fixation):
-        raise InputError("--fixation must be a number (the axis position in the tracks' units)")
+        raise InputError("`fixation` must be a number (the axis position in the tracks' units)")
     table = tracks.copy()
     given_fps = fps is not None
     if fps is not None:
         if not (fps > 0 and math.isfinite(fps)):
-            raise InputError("--fps must be a positive number of frames per second")
+            raise InputError("`fps` must be a positive number of frames per second")
         table["time_s"] = table["frame"] / fps
     elif table["time_s"].isna().any():
-        raise InputError("the tracks have no time_s column; pass --fps")
+        raise InputError("the tracks have no time_s column; pass `fps`")
     else:
         fps = _rate_from_times(table)
     if table.groupby("track")["time_s"].apply(lambda t: bool((np.diff(t.to_numpy()) <= 0).any())).any():

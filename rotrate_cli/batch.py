@@ -18,9 +18,9 @@ from pathlib import Path
 
 from rotrate_cli.analysis import Analysis, AnalysisConfig, analyze
 from rotrate_cli.errors import InputError, NoResultError, RotrateError
-from rotrate_cli.focal import parse_fov
-from rotrate_cli.lazy import pandas as pd
-from rotrate_cli.pools import available_cores
+from rotrate_cli.runtime.lazy import pandas as pd
+from rotrate_cli.runtime.pools import available_cores
+from rotrate_cli.scene.focal import parse_fov
 
 VIDEO_SUFFIXES = frozenset({".mp4", ".mov", ".avi", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"})
 SUMMARY_COLUMNS = ("file", "status", "omega", "omega_low", "omega_high", "rpm", "direction", "tracks_used",
@@ -92,11 +92,11 @@ def check_expectation(expected_rad_s: float | None, tolerance_pct: float | None)
     if expected_rad_s is None and tolerance_pct is None:
         return
     if expected_rad_s is None or tolerance_pct is None:
-        raise InputError("--expect and --tolerance go together: --expect OMEGA --tolerance PERCENT")
+        raise InputError("`expected_rad_s` and `tolerance_pct` go together: give both or neither")
     if not (math.isfinite(expected_rad_s) and expected_rad_s > 0):
-        raise InputError("--expect takes the expected rate in rad/s, a positive number")
+        raise InputError("`expected_rad_s` takes the expected rate in rad/s, a positive number")
     if not (math.isfinite(tolerance_pct) and tolerance_pct >= 0):
-        raise InputError("--tolerance takes a percentage, 0 or more")
+        raise InputError("`tolerance_pct` takes a percentage, 0 or more")
 
 
 @dataclass(frozen=True)
@@ -120,9 +120,9 @@ def run_one(job: Job) -> Outcome:
     except NoResultError as exc:
         return Outcome(job.source, "no_result", None, str(exc))
     except RotrateError as exc:
-        return Outcome(job.source, "bad_input" if exc.exit_code == 2 else "no_result", None, str(exc))
+        return Outcome(job.source, "bad_input", None, str(exc))  # OutputError: a file it could not write
     except MemoryError:
-        return Outcome(job.source, "failed", None, "ran out of memory; try --end or --every to analyse less")
+        return Outcome(job.source, "failed", None, "ran out of memory; try `end_s` or `every` to analyse less")
     except Exception as exc:  # noqa: BLE001 - one bad input must not stop the batch
         return Outcome(job.source, "failed", None, f"unexpected {type(exc).__name__}: {exc}")
     if job.expected_rad_s is not None and job.tolerance_pct is not None:
@@ -137,7 +137,7 @@ def run_one(job: Job) -> Outcome:
 def weak_message(analysis: Analysis) -> str:
     """The one line ``--strict`` fails with on a weak result."""
     reasons = "; ".join(analysis.verdict.weak_because) if analysis.verdict is not None else ""
-    return f"weak evidence ({reasons}); the result is not trusted with --strict"
+    return f"weak evidence ({reasons}); the result is not trusted with `strict`"
 
 
 def run_batch(
@@ -152,7 +152,7 @@ def run_batch(
         InputError: ``workers`` below 1, Dask not installed, or the scheduler unreachable.
     """
     if workers < 1:
-        raise InputError("--jobs takes a number of processes, 1 or more")
+        raise InputError("`workers` takes a number of processes, 1 or more")
     if scheduler is not None:
         return _run_on_dask(jobs, scheduler, done)
     outcomes: list[Outcome] = []
@@ -176,7 +176,7 @@ def _run_on_dask(jobs: Sequence[Job], scheduler: str, done: Callable[[Outcome], 
     try:
         from dask.distributed import Client
     except ImportError:
-        raise InputError("--scheduler needs Dask: pip install 'rotrate[dask]'") from None
+        raise InputError("`scheduler` needs Dask: pip install 'rotrate[dask]'") from None
     try:
         client = Client(scheduler, timeout="10s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:

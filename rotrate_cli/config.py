@@ -5,13 +5,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from rotrate_cli import rates
-from rotrate_cli.chosen import TRACKERS
-from rotrate_cli.errors import InputError
-from rotrate_cli.outliers import (
+from rotrate_cli.errors import SettingError
+from rotrate_cli.fitting import estimators
+from rotrate_cli.fitting.outliers import (
     RejectionConfig,
 )
-from rotrate_cli.tracking import (
+from rotrate_cli.tracking.chosen import TRACKERS
+from rotrate_cli.tracking.klt import (
     TrackerConfig,
 )
 
@@ -31,11 +31,11 @@ class AnalysisConfig:
         axis_angle_deg: the axis's angle in the image (0 vertical, positive: top end leaning
             right); None to find it (see ``angle_from``).
         angle_from: how the angle is found when not given: ``motion`` (the principal direction
-            of all the steps, :func:`rotrate_cli.axis.motion_angle_deg`), ``paths`` (the long
-            axis of each track's elliptical path, :func:`rotrate_cli.axis.path_shape`:
+            of all the steps, :func:`rotrate_cli.scene.axis.motion_angle_deg`), ``paths`` (the long
+            axis of each track's elliptical path, :func:`rotrate_cli.scene.axis.path_shape`:
             right when the camera looks down on the object, where ``motion`` leans), or
             ``auto`` (the default): ``paths`` where the steps show the camera looking down
-            (:func:`rotrate_cli.geometry.axis_angle`), ``motion`` otherwise.
+            (:func:`rotrate_cli.stages.geometry.axis_angle`), ``motion`` otherwise.
         elevation_deg: how far the camera looks down on the object, degrees, for the pinhole
             model (``fov_deg``/``focal_px``); None: level, or found from the paths where the
             angle comes from them.
@@ -53,7 +53,7 @@ class AnalysisConfig:
             (and no ``focal_px``) treats the view as orthographic, as the paper does.
         focal_px: the focal length in pixels, instead of ``fov_deg``.
         find_focal: find the focal length (and the camera's elevation) from the tracks' motion
-            in both image directions (:mod:`rotrate_cli.focal`; the default, ``--fov auto``)
+            in both image directions (:mod:`rotrate_cli.scene.focal`; the default, ``--fov auto``)
             where no lens is given (``fov_deg``/``focal_px``, or the photographs' EXIF); a view
             with no measurable perspective stays orthographic. False (``--fov ortho``): the
             paper's orthographic camera. Not for ``segment``, chosen points or the paper's method.
@@ -65,9 +65,9 @@ class AnalysisConfig:
         keep_tracks: keep the tracked positions in the result (``Analysis.tracks``), for
             pictures of the measurement; they cost memory in proportion to the clip.
         points_px: follow only these points (x, y pixels in the first analysed frame), as
-            features 1..n, instead of finding corners (see :mod:`rotrate_cli.chosen`).
+            features 1..n, instead of finding corners (see :mod:`rotrate_cli.tracking.chosen`).
         tracker_kind: ``klt`` (pyramidal Lucas-Kanade) or ``csrt`` (OpenCV's CSRT: for chosen
-            points, or for 30 automatic corners placed to sub-pixel, see :mod:`rotrate_cli.csrt`;
+            points, or for 30 automatic corners placed to sub-pixel, see :mod:`rotrate_cli.tracking.csrt`;
             about 5x slower than ``klt``, and for videos, not stills far apart).
         times_s: one time per frame, seconds (``--times``), instead of the source's clock.
     """
@@ -96,43 +96,51 @@ class AnalysisConfig:
 
 
 def check_config(config: AnalysisConfig) -> None:
-    if config.method not in rates.METHODS:
-        raise InputError(f"unknown method {config.method!r}; use one of {', '.join(rates.METHODS)}")
+    if config.method not in estimators.METHODS:
+        raise SettingError(f"`method` must be one of {', '.join(estimators.METHODS)}; got {config.method!r}", "method")
     if config.every is not None and config.every < 1:
-        raise InputError("--every must be a whole number of frames, 1 or more")
+        raise SettingError("`every` must be a whole number of frames, 1 or more", "every")
     if config.start_s < 0 or not math.isfinite(config.start_s):
-        raise InputError("--start must be 0 seconds or later")
+        raise SettingError("`start_s` must be 0 seconds or later", "start_s")
     if config.end_s is not None and not config.end_s > config.start_s:
-        raise InputError("--end must be later than --start")
+        raise SettingError("`end_s` must be later than `start_s`", "end_s")
     if config.fov_deg is not None and config.focal_px is not None:
-        raise InputError("give either --fov or --focal-px, not both")
+        raise SettingError("give either `fov_deg` or `focal_px`, not both", "fov_deg")
     if config.fov_deg is not None and not 0 < config.fov_deg < 170:
-        raise InputError("--fov must be a horizontal field of view between 0 and 170 degrees")
+        raise SettingError("`fov_deg` must be a horizontal field of view between 0 and 170 degrees", "fov_deg")
     if config.focal_px is not None and not (config.focal_px > 0 and math.isfinite(config.focal_px)):
-        raise InputError("--focal-px must be a positive focal length in pixels")
+        raise SettingError("`focal_px` must be a positive focal length in pixels", "focal_px")
     if config.window_s is not None and not (math.isfinite(config.window_s) and config.window_s > 0):
-        raise InputError("--window must be a positive number of seconds")
+        raise SettingError("`window_s` must be a positive number of seconds", "window_s")
     if config.axis_angle_deg is not None and not (math.isfinite(config.axis_angle_deg)
                                                    and -180 <= config.axis_angle_deg <= 180):
-        raise InputError("--axis-angle takes degrees between -180 and 180 (0: a vertical axis)")
+        raise SettingError("`axis_angle_deg` takes degrees between -180 and 180 (0: a vertical axis)", "axis_angle_deg")
     if config.angle_from not in ANGLE_SOURCES:
-        raise InputError(f"--angle-from must be one of {', '.join(ANGLE_SOURCES)}; got {config.angle_from!r}")
+        raise SettingError(f"`angle_from` must be one of {', '.join(ANGLE_SOURCES)}; got {config.angle_from!r}",
+                           "angle_from")
     if config.angle_from == "paths" and config.axis_angle_deg is not None:
-        raise InputError("give either --axis-angle or --angle-from paths, not both")
+        raise SettingError("give either `axis_angle_deg` or `angle_from='paths'`, not both", "axis_angle_deg")
     if config.angle_from == "paths" and config.segment:
-        raise InputError("--angle-from paths fits one rate to all paths; it cannot be combined with --segment")
+        raise SettingError("`angle_from='paths'` fits one rate to all paths; it cannot be combined with `segment`",
+                           "angle_from")
     if config.elevation_deg is not None:
         if not (math.isfinite(config.elevation_deg) and -80 <= config.elevation_deg <= 80):
-            raise InputError("--elevation must be between -80 and 80 degrees")
+            raise SettingError("`elevation_deg` must be between -80 and 80 degrees", "elevation_deg")
         if config.fov_deg is None and config.focal_px is None and not config.find_focal:
-            raise InputError("--elevation is for the pinhole model: drop --fov ortho, or give --fov or --focal-px")
+            raise SettingError("`elevation_deg` is for the pinhole model: drop `find_focal=False`, or give "
+                               "`fov_deg` or `focal_px`",
+                               "elevation_deg")
     if config.direction not in (None, *DIRECTIONS):
-        raise InputError(f"--direction must be one of {', '.join(DIRECTIONS)}; got {config.direction!r}")
+        raise SettingError(f"`direction` must be one of {', '.join(DIRECTIONS)}; got {config.direction!r}", "direction")
     if config.tracker_kind not in TRACKERS:
-        raise InputError(f"--tracker must be one of {', '.join(TRACKERS)}; got {config.tracker_kind!r}")
+        raise SettingError(f"`tracker_kind` must be one of {', '.join(TRACKERS)}; got {config.tracker_kind!r}",
+                           "tracker_kind")
     if config.segment and config.fixation_px is not None:
-        raise InputError("--segment finds each body's axis itself; drop --fixation (or use --fixation auto)")
+        raise SettingError("`segment` finds each body's axis itself; drop `fixation_px` (or use `fixation_px=None`)",
+                           "segment")
     if config.segment and config.window_s is not None:
-        raise InputError("--window follows one body; it cannot be combined with --segment")
+        raise SettingError("`window_s` follows one body; it cannot be combined with `segment`", "window_s")
     if config.method == "paper" and (config.fov_deg is not None or config.focal_px is not None):
-        raise InputError("--method paper is orthographic, as in the paper; drop --fov/--focal-px or use --method fit")
+        raise SettingError("`method='paper'` is orthographic, as in the paper; drop `fov_deg`/`focal_px` or "
+                           "use `method='fit'`",
+                           "method")

@@ -10,12 +10,13 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from rotrate_cli import AnalysisConfig, analyze, rates
-from rotrate_cli import axis as axes
+from rotrate_cli import AnalysisConfig, analyze
 from rotrate_cli.analysis import rates_from_offsets
 from rotrate_cli.cli import app
-from rotrate_cli.outliers import RejectionConfig
-from rotrate_cli.series import rate_series
+from rotrate_cli.fitting.camera import Camera
+from rotrate_cli.fitting.outliers import RejectionConfig
+from rotrate_cli.fitting.series import rate_series
+from rotrate_cli.scene import axis as axes
 from tests.conftest import DINOSAUR, SAMPLES, direction_seen_as, need, truth_of
 
 
@@ -116,7 +117,7 @@ def test_refining_the_axis_with_a_pinhole_camera(rng: np.random.Generator, omega
         rows.append(pd.DataFrame({"track": track, "time_s": time_s,
                                   "offset_px": x_n * focal_px - (axis_px + 3.0) + rng.normal(0, 0.05, len(time_s))}))
     samples = pd.concat(rows, ignore_index=True)
-    camera = rates.Camera(focal_px, (axis_px + 3.0) / focal_px, depth_scale)
+    camera = Camera(focal_px, (axis_px + 3.0) / focal_px, depth_scale)
     pinhole = axes.refine_axis_offset(samples, omega, camera)
     assert pinhole == pytest.approx(-3.0, abs=0.03)
     # the orthographic model misplaces it (by 0.1 px here: near points move faster)
@@ -134,7 +135,7 @@ def test_a_found_axis_is_moved_to_where_its_moves_end(monkeypatch: pytest.Monkey
     of the axis goes only part of the way: here 15% of what is left (a coupling of 0.85, as on
     the 15th to 64th photographs of EPFL car 10). Two plain moves left 72% of the first point's
     error; the moves now end where the point and the rate agree."""
-    from rotrate_cli import geometry
+    from rotrate_cli.stages import geometry
 
     settled_px, coupling = 7.0, 0.85
     ux, uy = axes.unit_offset(10.0)
@@ -163,10 +164,10 @@ def test_the_axis_and_rate_coupling_multiplies_the_rate_s_uncertainty(coupling: 
     """An error in the rate moves the axis, which moves the rate: 1 / (1 - coupling) times the
     error the tracks' scatter and the axis's placement give (at most 10: at 1 or more the tracks
     do not tell the two apart)."""
-    from rotrate_cli.doubts import with_axis_doubt
-    from rotrate_cli.fits import RateResult
-    from rotrate_cli.geometry import AxisSpread
-    from rotrate_cli.outliers import Combined
+    from rotrate_cli.fitting.outliers import Combined
+    from rotrate_cli.stages.checks import with_axis_doubt
+    from rotrate_cli.stages.fits import RateResult
+    from rotrate_cli.stages.geometry import AxisSpread
 
     offsets = pd.DataFrame({"track": [1] * 3, "time_s": [0.0, 1.0, 2.0], "offset_px": [0.0] * 3})
     result = RateResult(offsets, pd.DataFrame(), Combined(0.1, 0.099, 0.102, 20), "ccw")
@@ -366,7 +367,7 @@ def test_the_default_angle_comes_from_the_paths_when_the_camera_looks_down(eleva
     looking down, and there the paths give the angle (the motion's leans: -3 degrees at 20
     degrees above, for -6); from the side the motion does (and the paths, which cost time,
     are not read)."""
-    from rotrate_cli.geometry import axis_angle
+    from rotrate_cli.stages.geometry import axis_angle
 
     tracks = _near_side_paths(-6.0, elevation_deg, omega=0.5)
     spread = axes.steps_spread(tracks)
@@ -428,9 +429,9 @@ def test_elevation_needs_the_pinhole_model() -> None:
 def test_the_geometry_stage_is_one_typed_result() -> None:
     """The geometry stage on its own: the camera, axis and fixation of the perspective sample, as
     given or as found, in one Geometry; its view is read once the rate is known."""
-    from rotrate_cli.footage import read_footage
-    from rotrate_cli.geometry import locate, measure, settle_view
-    from rotrate_cli.view import keep_for_view
+    from rotrate_cli.scene.view import keep_for_view
+    from rotrate_cli.stages.geometry import locate, measure, settle_view
+    from rotrate_cli.stages.tracks import read_footage
 
     truth = truth_of(SAMPLES / "box_perspective.mp4")
     given = AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), fov_deg=25.0)
@@ -456,8 +457,8 @@ def test_the_lens_question_is_asked_only_where_a_lens_is_sought() -> None:
     """``locate`` takes the question "seek the lens?" as a function (the analysis works the
     answer, the clip's repetition, out beside the axis's search): asked once, after the axis
     is found, and only where the lens is not given; its answer is obeyed."""
-    from rotrate_cli.footage import read_footage
-    from rotrate_cli.geometry import locate
+    from rotrate_cli.stages.geometry import locate
+    from rotrate_cli.stages.tracks import read_footage
 
     asked: list[bool] = []
 
@@ -485,8 +486,8 @@ def test_direction_takes_ccw_or_cw() -> None:
 
 
 def test_a_direction_given_is_the_camera_s_sense() -> None:
-    from rotrate_cli.camera import camera_at, lens_from
-    from rotrate_cli.decode import VideoInfo
+    from rotrate_cli.stages.camera import camera_at, lens_from
+    from rotrate_cli.video.decode import VideoInfo
 
     info = VideoInfo("clip.mp4", 640, 360, 30.0, 90, False, False)
     for direction, sense in (("ccw", 1), ("cw", -1), (None, 0)):

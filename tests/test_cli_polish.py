@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import stat
 from pathlib import Path
 
@@ -117,3 +118,38 @@ def test_the_floor_job_pins_the_declared_floors() -> None:
     for name, floor in declared.items():
         assert name in pinned, f"{name} is not pinned in constraints/floor.txt"
         assert pinned[name].startswith(floor), f"{name}: declared >={floor}, tested {pinned[name]}"
+
+
+def test_library_messages_name_settings_and_the_command_line_says_its_flags():
+    """A library caller reads the setting it set (`every`); the command line's user reads the flag."""
+    from rotrate_cli import AnalysisConfig, SettingError, analyze
+    from rotrate_cli.cli import in_flags
+
+    with pytest.raises(SettingError, match="`every` must be a whole number") as caught:
+        analyze(SAMPLES / "box_ortho.mp4", AnalysisConfig(fixation_px=None, every=0))
+    assert caught.value.setting == "every"
+    assert "--" not in str(caught.value)
+    assert in_flags(str(caught.value)).startswith("--every must be a whole number")
+    assert in_flags("use `fixation_px=None` or `find_focal=False`; `every=3`; `not_a_setting`") == (
+        "use --fixation auto or --fov ortho; --every 3; `not_a_setting`")
+
+
+def test_no_library_message_names_a_flag():
+    """Flags belong to the command line (rotrate_cli/cli/): a library string never names one."""
+    import ast
+
+    package = Path(__file__).resolve().parents[1] / "rotrate_cli"
+    named = []
+    for path in package.rglob("*.py"):
+        if "cli" in path.relative_to(package).parts[:1]:
+            continue
+        tree = ast.parse(path.read_text())
+        docstrings = {id(node.body[0].value) for node in ast.walk(tree)
+                      if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef)
+                      and node.body and isinstance(node.body[0], ast.Expr)
+                      and isinstance(node.body[0].value, ast.Constant)}
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings
+                    and re.search(r"(?<![\w-])--[a-z][a-z-]+", node.value)):
+                named.append(f"{path.name}:{node.lineno}: {node.value[:60]}")
+    assert not named, named

@@ -12,9 +12,9 @@ from PIL import Image
 from typer.testing import CliRunner
 
 from rotrate_cli.cli import app
-from rotrate_cli.clock import exif_focal_px, exif_times, read_times
-from rotrate_cli.decode import FrameSource
 from rotrate_cli.errors import InputError
+from rotrate_cli.video.clock import exif_focal_px, exif_times, read_times
+from rotrate_cli.video.decode import FrameSource
 
 runner = CliRunner()
 
@@ -66,7 +66,7 @@ def test_images_without_times_need_fps(tmp_path: Path) -> None:
     folder.mkdir()
     for index in range(4):
         cv2.imwrite(str(folder / f"{index}.png"), np.full((20, 30), 40 * index, np.uint8))
-    with pytest.raises(InputError, match="--fps .* or --times"):
+    with pytest.raises(InputError, match="`fps` .* or `times_s`"):
         FrameSource(folder)
 
 
@@ -114,7 +114,7 @@ def test_times_on_a_video_must_match_its_frames(tmp_path: Path) -> None:
 
 def test_fps_that_contradicts_a_videos_own_rate_is_warned_of() -> None:
     clip = Path(__file__).resolve().parents[1] / "sample_videos" / "box_ortho.mp4"  # 30 fps
-    assert any("--fps 25 differs from the stream's own rate (30" in w for w in FrameSource(clip, fps=25.0).warnings)
+    assert any("`fps=25` differs from the stream's own rate (30" in w for w in FrameSource(clip, fps=25.0).warnings)
     assert not FrameSource(clip, fps=30.0).warnings
     result = runner.invoke(app, ["analyze", str(clip), "--fixation", "319.5,179.5", "--fps", "25", "-q", "-f", "json"])
     assert result.exit_code == 0 and "differs from the stream's own rate" in result.stderr

@@ -8,12 +8,12 @@ from pathlib import Path
 import pytest
 
 from rotrate_cli.analysis import AnalysisConfig, analyze
-from rotrate_cli.synth import SceneConfig, write_clip
+from rotrate_cli.video.synth import SceneConfig, write_clip
 from tests.conftest import SAMPLES, truth_of
 
 
 def _changes(warnings: tuple[str, ...]) -> bool:
-    return any("the rate changes over the clip" in warning and "--window" in warning for warning in warnings)
+    return any("the rate changes over the clip" in warning and "`window_s`" in warning for warning in warnings)
 
 
 def test_spin_up_sample_is_said_and_its_axis_found() -> None:
@@ -82,11 +82,11 @@ def test_the_paths_check_is_asked_of_orthographic_fits_only(monkeypatch) -> None
     """The paths' rate models circles seen from far away: it widens orthographic results seen
     obliquely, and is not asked where the rates were measured through a pinhole (through 25-30
     degree lenses from above it read +6.6% to +15% and made good results weak)."""
-    from rotrate_cli import doubts
+    from rotrate_cli.stages import checks
 
     asked = []
-    original = doubts.with_paths_rate
-    monkeypatch.setattr(doubts, "with_paths_rate", lambda result, tracks: asked.append(1) or original(result, tracks))
+    original = checks.with_paths_rate
+    monkeypatch.setattr(checks, "with_paths_rate", lambda result, tracks: asked.append(1) or original(result, tracks))
     clip = SAMPLES / "box_perspective.mp4"
     fixation = tuple(truth_of(clip)["fixation_px"])
     pinhole = analyze(clip, AnalysisConfig(fixation_px=fixation, fov_deg=25.0))
@@ -102,9 +102,9 @@ def test_one_automatic_track_alone_gives_an_interval_to_half_a_turn_a_frame() ->
 
     import pandas as pd
 
-    from rotrate_cli.doubts import with_lone_track
-    from rotrate_cli.fits import RateResult
-    from rotrate_cli.outliers import Combined
+    from rotrate_cli.fitting.outliers import Combined
+    from rotrate_cli.stages.checks import with_lone_track
+    from rotrate_cli.stages.fits import RateResult
 
     offsets = pd.DataFrame({"track": [0, 0], "frame": [0, 1], "time_s": [0.0, 0.04], "offset_px": [1.0, 2.0]})
     one = RateResult(offsets, pd.DataFrame(), Combined(0.49, 0.47, 0.51, 1), "ccw")

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from rotrate_cli import AnalysisConfig, analyze
-from rotrate_cli.csrt import CsrtTracker, _parabola_peak, csrt_settings
-from rotrate_cli.decode import Frame
-from rotrate_cli.tracking import TrackerConfig, track_frames
+from rotrate_cli.tracking.csrt import CsrtTracker, _parabola_peak, csrt_settings
+from rotrate_cli.tracking.klt import TrackerConfig, track_frames
+from rotrate_cli.video.decode import Frame
 from tests.conftest import SAMPLES
 
 
@@ -83,4 +83,4 @@ def test_csrt_on_stills_far_apart_says_to_use_klt() -> None:
     assert analysis.rate_from == "repetition"
     assert analysis.omega_rad_s == pytest.approx(math.radians(10.0), rel=0.01)
     assert analysis.direction == "unknown"
-    assert any("--tracker klt" in warning for warning in analysis.warnings)
+    assert any("`tracker_kind='klt'`" in warning for warning in analysis.warnings)

@@ -8,8 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
-from rotrate_cli.decode import FrameSource, prefetch
 from rotrate_cli.errors import InputError
+from rotrate_cli.video.decode import FrameSource, prefetch
 from tests.conftest import SAMPLES
 
 
@@ -56,7 +56,7 @@ def test_pattern_without_matches(tmp_path: Path) -> None:
 
 
 def test_absurd_frame_rate() -> None:
-    with pytest.raises(InputError, match="--fps"):
+    with pytest.raises(InputError, match="`fps`"):
         FrameSource(SAMPLES / "box_ortho.mp4", fps=1e9)
 
 
@@ -110,7 +110,7 @@ def test_grey_frames_of_an_image_sequence(tmp_path: Path) -> None:
 
 
 def test_luma_levels_applied_after_the_reduction_give_the_same_tracking_image() -> None:
-    from rotrate_cli.tracking import tracking_image
+    from rotrate_cli.tracking.klt import tracking_image
 
     source = FrameSource(SAMPLES / "box_ortho.mp4")
     levels = source.luma_levels()

@@ -9,7 +9,7 @@ import pytest
 
 from rotrate_cli import AnalysisConfig, analyze
 from rotrate_cli.analysis import analyze_tracks
-from rotrate_cli.tracks_io import read_tracks
+from rotrate_cli.tracking.tracks_io import read_tracks
 from tests.conftest import DINOSAUR, need
 
 

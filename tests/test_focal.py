@@ -1,4 +1,4 @@
-"""--fov auto: the focal length and elevation from the tracks (rotrate_cli.focal)."""
+"""--fov auto: the focal length and elevation from the tracks (rotrate_cli.scene.focal)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pytest
 
 from rotrate_cli import AnalysisConfig, analyze
 from rotrate_cli.errors import InputError
-from rotrate_cli.focal import estimate_focal, parse_fov
+from rotrate_cli.scene.focal import estimate_focal, parse_fov
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_videos"
 SIZE = (640, 360)
@@ -133,9 +133,9 @@ def test_cli_fov_auto_json_and_bad_values() -> None:
 def test_the_lens_is_not_sought_on_a_changing_rate() -> None:
     """box_spinup.mp4 (0.3 + 0.15 t rad/s, orthographic): one steady rate is the lens model's, and a
     spin-up read as perspective (an 11-degree lens, whenever its tracks changed a little)."""
-    from rotrate_cli import axis as axes
-    from rotrate_cli.camera import _changing
-    from rotrate_cli.footage import read_footage
+    from rotrate_cli.scene import axis as axes
+    from rotrate_cli.stages.camera import _changing
+    from rotrate_cli.stages.tracks import read_footage
 
     for name, changing in (("box_spinup.mp4", True), ("box_perspective.mp4", False), ("box_ortho.mp4", False)):
         footage = read_footage(SAMPLES / name, AnalysisConfig(fixation_px=(319.5, 179.5)))
@@ -149,7 +149,7 @@ def test_a_lens_the_tracks_cannot_tell_widens_the_interval_and_says_so() -> None
     """box_spinup.mp4: the lens is not sought on a changing rate (above), so it is unknown: the
     orthographic model is used, a warning says so, and the interval holds the rates through any
     lens up to 70 degrees across. With ``--fov ortho`` (the paper's model chosen) nothing widens."""
-    from rotrate_cli.camera import WIDEST_FOV_DEG
+    from rotrate_cli.stages.camera import WIDEST_FOV_DEG
 
     config = AnalysisConfig(fixation_px=(319.5, 179.5))
     unknown = analyze(SAMPLES / "box_spinup.mp4", config)
@@ -166,7 +166,7 @@ def test_a_fit_stopped_at_the_orthographic_bound_is_started_again_from_a_wide_le
     """A cylinder filling a portrait frame through a 40-degree lens, seen from 15 degrees above:
     the fit from the orthographic start stopped at the bound, and the clip read +49% within
     [+45%, +54%], called good. Started again from 45 degrees the fit finds 41 degrees."""
-    from rotrate_cli.synth import SceneConfig, write_clip
+    from rotrate_cli.video.synth import SceneConfig, write_clip
 
     scene = SceneConfig(shape="cylinder", omega_rad_s=-0.7, duration_s=5.0, width_px=360, height_px=640,
                         projection="perspective", fov_deg=40.0, elevation_deg=15.0, noise_sigma=2.0, supersample=1)
@@ -219,7 +219,7 @@ def test_the_lens_fit_moves_an_axis_point_found_off_the_axis() -> None:
 def test_jacobian_matches_differences(inverse_focal: float) -> None:
     """The lens fit's worked-out derivatives against central differences of its residuals, at
     an orthographic camera, a usual lens and one so wide that some depths are clamped."""
-    from rotrate_cli.focal import SHARED, _Model
+    from rotrate_cli.scene.focal import SHARED, _Model
 
     rng = np.random.default_rng(3)
     chosen = [(np.sort(rng.random(20) * 3.0), rng.random(20) * 100 + 200, rng.random(20) * 50 + 100)
@@ -246,7 +246,7 @@ def test_a_found_lens_widens_the_interval_by_its_measured_error(tmp_path: Path) 
     (bench-random 1002): found within 2%, it read -0.1% and was called weak, its interval +-7.4%
     from a floor of +-50%; now good. A box seen from 60 degrees above through a 65-degree lens,
     found at 79 (bench-random 7002): -2.4%, held only by the 7 standard errors."""
-    from rotrate_cli.synth import SceneConfig, write_clip
+    from rotrate_cli.video.synth import SceneConfig, write_clip
 
     wide = tmp_path / "wide.mp4"
     write_clip(SceneConfig(shape="cylinder", omega_rad_s=-0.8, fps=30.0, duration_s=4.0, projection="perspective",

@@ -6,13 +6,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rotrate_cli import rates
-from rotrate_cli.joint import joint_fit
-from rotrate_cli.outliers import combine
+from rotrate_cli.fitting import estimators
+from rotrate_cli.fitting.camera import Camera
+from rotrate_cli.fitting.joint import joint_fit
+from rotrate_cli.fitting.outliers import combine
 
 
 def _short_noisy_tracks(rng: np.random.Generator, omega: float, tracks: int, samples: int,
-                        step_s: float, noise_px: float, camera: rates.Camera | None = None) -> pd.DataFrame:
+                        step_s: float, noise_px: float, camera: Camera | None = None) -> pd.DataFrame:
     """Tracks of ``samples`` samples each, radius 20..150 px, random phase and start."""
     rows = []
     for track in range(tracks):
@@ -35,7 +36,7 @@ def test_joint_fit_removes_the_small_track_bias_of_averaging(rng: np.random.Gene
     # per-track rates is measured 2-4% high here, the joint fit under 1%)
     omega = 0.1745
     samples = _short_noisy_tracks(rng, omega, tracks=400, samples=6, step_s=1.0, noise_px=1.5)
-    fits = rates.fit_tracks(samples, min_samples=5)
+    fits = estimators.fit_tracks(samples, min_samples=5)
     good = {k: f for k, f in fits.items() if np.isfinite(f.omega_rad_s) and np.isfinite(f.omega_se_rad_s)}
     pooled = combine(np.array([f.omega_rad_s for f in good.values()]),
                      np.array([f.omega_se_rad_s for f in good.values()]))
@@ -49,7 +50,7 @@ def test_joint_fit_removes_the_small_track_bias_of_averaging(rng: np.random.Gene
 
 @pytest.mark.parametrize("sense", [1, -1])
 def test_joint_fit_with_a_pinhole_camera(rng: np.random.Generator, sense: int) -> None:
-    camera = rates.Camera(900.0, 0.05)
+    camera = Camera(900.0, 0.05)
     samples = _short_noisy_tracks(rng, sense * 0.8, tracks=60, samples=40, step_s=1 / 30, noise_px=0.2,
                                   camera=camera)
     result = joint_fit(samples, dict.fromkeys(range(60), 0.2), 0.75, camera=camera, sense=sense)
@@ -79,7 +80,7 @@ def test_no_tracks_or_no_guess_gives_nan() -> None:
 
 
 def test_ragged_tracks_sum_and_split_like_a_group_by(rng: np.random.Generator) -> None:
-    from rotrate_cli.ragged import Ragged
+    from rotrate_cli.fitting.ragged import Ragged
 
     samples = _short_noisy_tracks(rng, 0.5, tracks=30, samples=7, step_s=0.1, noise_px=1.0)
     samples = samples[samples.index % 5 != 0]  # uneven lengths
@@ -99,7 +100,7 @@ def test_ragged_tracks_sum_and_split_like_a_group_by(rng: np.random.Generator) -
 def test_leave_one_out_in_chunks_matches_the_whole_table(monkeypatch):
     """The delete-one-track minima are taken a chunk of tracks at a time (memory on long
     clips): the same numbers as from the whole tracks x grid table, across chunk edges."""
-    from rotrate_cli import joint
+    from rotrate_cli.fitting import joint
 
     rng = np.random.default_rng(5)
     grid = np.linspace(0.9, 1.1, 25)

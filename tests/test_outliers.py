@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rotrate_cli import rates
-from rotrate_cli.outliers import RejectionConfig, combine, judge_fits
+from rotrate_cli.fitting import estimators
+from rotrate_cli.fitting.outliers import RejectionConfig, combine, judge_fits
 
 
 def _samples(rng: np.random.Generator) -> pd.DataFrame:
@@ -32,7 +32,7 @@ def _samples(rng: np.random.Generator) -> pd.DataFrame:
 
 def test_each_rule_rejects_its_case(rng: np.random.Generator) -> None:
     samples = _samples(rng)
-    verdict = judge_fits(samples, rates.fit_tracks(samples), RejectionConfig()).set_index("track")["reason"]
+    verdict = judge_fits(samples, estimators.fit_tracks(samples), RejectionConfig()).set_index("track")["reason"]
     assert (verdict[list(range(10))] == "").all()
     assert verdict[100] == "static"
     assert verdict[101] == "short"
@@ -63,8 +63,8 @@ def _result_with_sides(left_rate: float, right_rate: float, per_side: int = 6):
     """A rate result whose inlier tracks lie left (offsets < 0) and right of the axis."""
     import pandas as pd
 
-    from rotrate_cli.fits import RateResult
-    from rotrate_cli.outliers import Combined
+    from rotrate_cli.fitting.outliers import Combined
+    from rotrate_cli.stages.fits import RateResult
 
     rows, offsets = [], []
     for k in range(2 * per_side):
@@ -77,7 +77,7 @@ def _result_with_sides(left_rate: float, right_rate: float, per_side: int = 6):
 
 
 def test_tracks_either_side_of_the_axis_must_agree() -> None:
-    from rotrate_cli.doubts import sides_disagree
+    from rotrate_cli.stages.checks import sides_disagree
 
     assert sides_disagree(_result_with_sides(0.50, 0.50)) is None
     doubt = sides_disagree(_result_with_sides(0.46, 0.50))  # 8% apart, each side tight
@@ -90,8 +90,8 @@ def test_sides_that_disagree_widen_the_interval_to_hold_both() -> None:
     70 photographs: +5.6% within [+1.9%, +9.3%], the left side 13% lower; now [-22.8%, +9.3%])."""
     from dataclasses import replace
 
-    from rotrate_cli.doubts import with_sides_span
-    from rotrate_cli.outliers import Combined
+    from rotrate_cli.fitting.outliers import Combined
+    from rotrate_cli.stages.checks import with_sides_span
 
     apart = _result_with_sides(0.46, 0.50)
     narrow = replace(apart, combined=Combined(0.495, 0.49, 0.50, 12))  # the joint fit followed one side
@@ -105,7 +105,7 @@ def test_sides_that_disagree_widen_the_interval_to_hold_both() -> None:
 def _result_with_rates(rate: np.ndarray, se: float = 0.01, reasons: list[str] | None = None):
     """A rate result whose moving tracks have these rates (inliers unless ``reasons`` say
     otherwise), combined as the inliers' random-effects mean."""
-    from rotrate_cli.fits import RateResult
+    from rotrate_cli.stages.fits import RateResult
 
     reason = reasons if reasons is not None else [""] * len(rate)
     features = pd.DataFrame({"track": np.arange(1, len(rate) + 1), "omega_rad_s": rate,
@@ -123,7 +123,7 @@ def test_tracks_that_fall_into_two_groups_of_rates_are_told_and_the_interval_hol
     its truth 3.55."""
     from dataclasses import replace
 
-    from rotrate_cli.doubts import rates_split, split_doubt
+    from rotrate_cli.stages.checks import rates_split, split_doubt
 
     slow = 0.6 + 0.15 * rng.standard_normal(19)
     fast = 4.3 + 0.4 * rng.standard_normal(6)
@@ -148,7 +148,7 @@ def test_one_body_s_scattered_rates_do_not_split(rng: np.random.Generator) -> No
     """A heavy-tailed scatter of one rate (Student's t, 3 degrees of freedom: tracker slips) does
     not split however many tracks; nor do two groups far apart where the smaller is under the
     share (3 of 25), nor those with tracks between them."""
-    from rotrate_cli.doubts import SPLIT_MIN_SHARE, rates_split
+    from rotrate_cli.stages.checks import SPLIT_MIN_SHARE, rates_split
 
     for count in (8, 25, 300, 3000):
         assert rates_split(_result_with_rates(0.5 + 0.01 * rng.standard_t(3, count))) is None
@@ -167,8 +167,8 @@ def test_an_axis_found_from_two_tracks_leaves_the_rate_open() -> None:
     interval stays as it was."""
     from dataclasses import replace
 
-    from rotrate_cli.doubts import with_unplaced_axis
-    from rotrate_cli.outliers import Combined
+    from rotrate_cli.fitting.outliers import Combined
+    from rotrate_cli.stages.checks import with_unplaced_axis
 
     two = _result_with_rates(np.array([0.0148, 0.0129]), se=0.002)
     widened, doubt = with_unplaced_axis(two, fixation_found=True, fps=1.0)
@@ -187,9 +187,9 @@ def test_a_coarse_clock_widens_the_tracks_interval() -> None:
 
     import pandas as pd
 
-    from rotrate_cli.doubts import with_clock_doubt
-    from rotrate_cli.fits import RateResult
-    from rotrate_cli.outliers import Combined
+    from rotrate_cli.fitting.outliers import Combined
+    from rotrate_cli.stages.checks import with_clock_doubt
+    from rotrate_cli.stages.fits import RateResult
 
     offsets = pd.DataFrame({"track": [1] * 31, "time_s": np.arange(31.0), "offset_px": np.zeros(31)})
     result = RateResult(offsets, pd.DataFrame(), Combined(0.1, 0.099, 0.101, 20), "ccw")

@@ -1,5 +1,5 @@
-"""The lens fit's samples placed again by an affine patch match (rotrate_cli.patches), on the
-tracker's images kept evenly over the clip (rotrate_cli.keyframes)."""
+"""The lens fit's samples placed again by an affine patch match (rotrate_cli.scene.patches), on the
+tracker's images kept evenly over the clip (rotrate_cli.tracking.keyframes)."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from rotrate_cli import AnalysisConfig, analyze
-from rotrate_cli.decode import Frame
-from rotrate_cli.keyframes import Keyframes
-from rotrate_cli.patches import place_again
+from rotrate_cli.scene.patches import place_again
+from rotrate_cli.tracking.keyframes import Keyframes
+from rotrate_cli.video.decode import Frame
 
 
 def test_keyframes_stay_within_their_budget_and_evenly_spread() -> None:
@@ -78,7 +78,7 @@ def test_a_sphere_through_a_lens_is_measured_with_its_lens(tmp_path: Path) -> No
     deformation just as a pinhole's bob would, and the lens was found at 26.6-30.0 degrees on
     three renders (2.4-4.0% slow). Placed again on the kept frames, 19.6-20.7 degrees and
     within 0.6%."""
-    from rotrate_cli.synth import SceneConfig, write_clip
+    from rotrate_cli.video.synth import SceneConfig, write_clip
 
     scene = SceneConfig(shape="sphere", omega_rad_s=0.7, duration_s=4.0, width_px=640, height_px=360,
                         projection="perspective", fov_deg=20.0, supersample=1, seed=2)

@@ -1,5 +1,5 @@
-"""The rate from the clip's repetition (:mod:`rotrate_cli.period`) and how it is weighed with
-the tracks' (:mod:`rotrate_cli.verdict`), on pictures of a turning texture with known periods."""
+"""The rate from the clip's repetition (:mod:`rotrate_cli.stages.period`) and how it is weighed with
+the tracks' (:mod:`rotrate_cli.stages.verdict`), on pictures of a turning texture with known periods."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
-from rotrate_cli.decode import Frame
-from rotrate_cli.outliers import Combined
-from rotrate_cli.period import Period, Thumbnails, find_period
-from rotrate_cli.verdict import judge, turns_between
+from rotrate_cli.fitting.outliers import Combined
+from rotrate_cli.stages.period import Period, Thumbnails, find_period
+from rotrate_cli.stages.verdict import judge, turns_between
+from rotrate_cli.video.decode import Frame
 
 
 def _turning(times_s: np.ndarray, period_s: float, symmetry: int = 1, size: int = 96, seed: int = 7) -> Thumbnails:
@@ -122,7 +122,7 @@ def _arrays(thumbnails: Thumbnails) -> tuple[np.ndarray, np.ndarray]:
 def _single_closing(excess: float, frames: int = 50, lag_frames: float = 49.0):
     """A repetition seen once: a clip of ``frames`` photographs whose last comes back to the
     first after ``lag_frames`` (period 49 s at 1 frame/s)."""
-    from rotrate_cli.period import Period
+    from rotrate_cli.stages.period import Period
 
     return Period(49.0, 48.5, 49.5, 1, frames, 0.2, 0.9, 0.0, excess, lag_frames)
 
@@ -225,7 +225,7 @@ def test_a_fast_box_is_measured_from_its_returns_and_marked_weak(tmp_path) -> No
     two frames, and its picture is most alike after 88 frames, 7 turns. Read as one turn that
     was 2.14 rad/s, called good."""
     from rotrate_cli.analysis import AnalysisConfig, analyze
-    from rotrate_cli.synth import Renderer, SceneConfig
+    from rotrate_cli.video.synth import Renderer, SceneConfig
 
     scene = SceneConfig(shape="box", omega_rad_s=15.0, fps=30.0, duration_s=3.0, supersample=1, seed=3)
     renderer = Renderer(scene)
@@ -265,7 +265,8 @@ def test_the_first_fit_does_not_wait_for_the_clips_repetition(monkeypatch, fixat
     import threading
     from pathlib import Path
 
-    from rotrate_cli import analysis, fits
+    from rotrate_cli import analysis
+    from rotrate_cli.stages import fits
 
     fitting = threading.Event()
     fit_first = fits.rates_from_offsets
@@ -281,7 +282,7 @@ def test_the_first_fit_does_not_wait_for_the_clips_repetition(monkeypatch, fixat
         return find_first(*args, **kwargs)
 
     monkeypatch.setattr(analysis, "find_period", waiting)
-    monkeypatch.setattr("rotrate_cli.geometry.rates_from_offsets", noted)
+    monkeypatch.setattr("rotrate_cli.stages.geometry.rates_from_offsets", noted)
     clip = Path(__file__).resolve().parents[1] / "sample_videos" / "box_ortho.mp4"
     result = analysis.analyze(clip, analysis.AnalysisConfig(fixation_px=fixation_px, find_focal=False))
     assert fitting.is_set()

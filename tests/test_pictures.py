@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from rotrate_cli.cli import app
-from rotrate_cli.decode import FrameSource
+from rotrate_cli.video.decode import FrameSource
 from tests.conftest import SAMPLES, truth_of
 
 runner = CliRunner()
@@ -206,8 +206,8 @@ def test_the_running_rate_of_pictures_is_measured_as_the_headline() -> None:
     measured orthographically: an EPFL car through its 64-degree lens read 0.052 rad/s beside a
     headline of 0.046)."""
     from rotrate_cli.analysis import AnalysisConfig, analyze
-    from rotrate_cli.fits import running_measure
-    from rotrate_cli.series import running_rate
+    from rotrate_cli.fitting.series import running_rate
+    from rotrate_cli.stages.fits import running_measure
 
     analysis = analyze(SAMPLES / "box_perspective.mp4", AnalysisConfig(fixation_px=(319.5, 179.5), fov_deg=25.0))
     assert analysis.camera is not None

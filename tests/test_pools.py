@@ -1,4 +1,4 @@
-"""The libraries' thread pools while an analysis runs (rotrate_cli/pools.py)."""
+"""The libraries' thread pools while an analysis runs (rotrate_cli/runtime/pools.py)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import cv2
 import pytest
 import threadpoolctl  # a runtime dependency (pyproject): its absence is a failure, not a skip
 
-from rotrate_cli.pools import available_cores, opencv_threads, pipeline_threads
+from rotrate_cli.runtime.pools import available_cores, opencv_threads, pipeline_threads
 
 
 def test_pools_are_sized_for_the_run_and_put_back() -> None:

@@ -21,7 +21,7 @@ from typer.testing import CliRunner
 from rotrate_cli.analysis import analyze_tracks
 from rotrate_cli.cli import app
 from rotrate_cli.errors import InputError
-from rotrate_cli.tracks_io import read_tracks
+from rotrate_cli.tracking.tracks_io import read_tracks
 from tests.conftest import SAMPLES
 
 PROPERTY = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])

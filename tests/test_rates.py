@@ -8,12 +8,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rotrate_cli import rates
-from rotrate_cli.axis import refine_axis_offset
-from rotrate_cli.doubts import told_sense_doubt, undecided_sense
-from rotrate_cli.fits import rates_from_offsets
-from rotrate_cli.geometry import _inliers_and_rate
-from rotrate_cli.outliers import RejectionConfig
+from rotrate_cli.fitting import estimators
+from rotrate_cli.fitting.camera import Camera
+from rotrate_cli.fitting.outliers import RejectionConfig
+from rotrate_cli.scene.axis import refine_axis_offset
+from rotrate_cli.stages.checks import told_sense_doubt, undecided_sense
+from rotrate_cli.stages.fits import rates_from_offsets
+from rotrate_cli.stages.geometry import _inliers_and_rate
 
 
 @pytest.mark.parametrize("omega", [0.1, 0.327, 1.0, 3.14])
@@ -22,7 +23,7 @@ def test_fit_is_exact_on_clean_sinusoids(omega: float, step_s: float) -> None:
     n = max(8, int(round(2.0 / (omega * step_s))))  # about two radians of arc
     time_s = np.arange(n) * step_s
     offset = 80.0 * np.cos(omega * time_s + 0.4)
-    fit = rates.fit_track(time_s, offset)
+    fit = estimators.fit_track(time_s, offset)
     assert fit.omega_rad_s == pytest.approx(omega, rel=1e-7)
     assert fit.amplitude == pytest.approx(80.0, rel=1e-6)
     assert fit.rms_residual < 1e-6
@@ -33,7 +34,7 @@ def test_fit_handles_uneven_times_and_coarse_steps() -> None:
     rng = np.random.default_rng(1)
     time_s = np.cumsum(rng.uniform(0.8, 1.2, 15))
     offset = 150.0 * np.sin(0.17453 * time_s - 1.0)
-    assert rates.fit_track(time_s, offset).omega_rad_s == pytest.approx(0.17453, rel=1e-7)
+    assert estimators.fit_track(time_s, offset).omega_rad_s == pytest.approx(0.17453, rel=1e-7)
 
 
 def test_fit_with_noise_is_unbiased_and_its_error_is_honest(rng: np.random.Generator) -> None:
@@ -42,7 +43,7 @@ def test_fit_with_noise_is_unbiased_and_its_error_is_honest(rng: np.random.Gener
     estimates, errors = [], []
     for _ in range(200):
         offset = 100.0 * np.cos(omega * time_s - 0.7) + rng.normal(0, sigma, time_s.size)
-        fit = rates.fit_track(time_s, offset)
+        fit = estimators.fit_track(time_s, offset)
         estimates.append(fit.omega_rad_s)
         errors.append(fit.omega_se_rad_s)
     estimates = np.array(estimates)
@@ -53,15 +54,16 @@ def test_fit_with_noise_is_unbiased_and_its_error_is_honest(rng: np.random.Gener
 
 def test_recurrence_is_exact_and_flags_curving_away() -> None:
     time_s = np.arange(12) * 0.1
-    assert rates.recurrence_omega(time_s, 5 * np.cos(2.0 * time_s)) == pytest.approx(2.0, rel=1e-9)
-    assert math.isnan(rates.recurrence_omega(time_s, 5 * np.cosh(2.0 * time_s)))
-    assert math.isnan(rates.fit_track(time_s, 5 * np.cosh(2.0 * time_s)).omega_rad_s)
+    assert estimators.recurrence_omega(time_s, 5 * np.cos(2.0 * time_s)) == pytest.approx(2.0, rel=1e-9)
+    assert math.isnan(estimators.recurrence_omega(time_s, 5 * np.cosh(2.0 * time_s)))
+    assert math.isnan(estimators.fit_track(time_s, 5 * np.cosh(2.0 * time_s)).omega_rad_s)
 
 
 def test_paper_samples_are_backward_differences() -> None:
     time_s = np.arange(5) * 0.5
     offset = np.array([3.0, 2.8, 2.2, 1.4, 0.3])
-    table = rates.paper_samples(pd.DataFrame({"track": 1, "frame": range(5), "time_s": time_s, "offset_px": offset}))
+    samples = pd.DataFrame({"track": 1, "frame": range(5), "time_s": time_s, "offset_px": offset})
+    table = estimators.paper_samples(samples)
     dy = np.diff(offset) / 0.5
     assert np.allclose(table["dy_dt"].to_numpy()[1:], dy)
     assert np.allclose(table["d2y_dt2"].to_numpy()[2:], np.diff(dy) / 0.5)
@@ -73,7 +75,7 @@ def test_local_samples_give_the_rate_at_every_interior_sample() -> None:
     time_s = np.arange(40) / 30.0
     offset = 60.0 * np.cos(0.9 * time_s + 0.2)
     samples = pd.DataFrame({"track": 3, "frame": range(40), "time_s": time_s, "offset_px": offset})
-    table = rates.fit_samples(samples, {3: rates.fit_tracks(samples)[3].omega_rad_s})
+    table = estimators.fit_samples(samples, {3: estimators.fit_tracks(samples)[3].omega_rad_s})
     valid = table["omega_rad_s"].dropna()
     assert len(valid) >= 20
     assert np.allclose(valid, 0.9, rtol=1e-6)
@@ -85,15 +87,15 @@ def test_local_samples_give_the_rate_at_every_interior_sample() -> None:
 def test_pinhole_fit_recovers_rate_and_sense(omega: float) -> None:
     # camera 1 unit from the axis (normalised), point at radius 0.25, axis 40 px right of centre
     focal_px, axis_px = 1200.0, 40.0
-    camera = rates.Camera(focal_px, axis_px / focal_px)
+    camera = Camera(focal_px, axis_px / focal_px)
     time_s = np.arange(60) / 30.0
     angle = omega * time_s + 0.3
     x_n = (camera.axis_n + 0.25 * np.sin(angle)) / (1 - 0.25 * np.cos(angle))
     offset = x_n * focal_px - axis_px
-    fit = rates._fit_batch(time_s[None], offset[None], np.ones((1, 60), bool), camera)[0]
+    fit = estimators._fit_batch(time_s[None], offset[None], np.ones((1, 60), bool), camera)[0]
     assert fit.omega_rad_s == pytest.approx(abs(omega), rel=1e-7)
     assert fit.sense == np.sign(omega)
-    ortho = rates.fit_track(time_s, offset)
+    ortho = estimators.fit_track(time_s, offset)
     assert abs(ortho.omega_rad_s / abs(omega) - 1) > 0.01  # what ignoring perspective costs here
 
 
@@ -104,16 +106,17 @@ def test_pinhole_fit_of_a_camera_looking_down() -> None:
     angle = 0.5 * time_s + 0.3
     x_n = 0.25 * np.sin(angle) / (1 - depth_scale * 0.25 * np.cos(angle))
     offset = x_n * focal_px
-    looking_down = rates._fit_batch(time_s[None], offset[None], np.ones((1, 60), bool),
-                                    rates.Camera(focal_px, 0.0, depth_scale))[0]
-    level = rates._fit_batch(time_s[None], offset[None], np.ones((1, 60), bool), rates.Camera(focal_px, 0.0))[0]
+    looking_down = estimators._fit_batch(time_s[None], offset[None], np.ones((1, 60), bool),
+                                    Camera(focal_px, 0.0, depth_scale))[0]
+    camera = Camera(focal_px, 0.0)
+    level = estimators._fit_batch(time_s[None], offset[None], np.ones((1, 60), bool), camera)[0]
     assert looking_down.omega_rad_s == pytest.approx(0.5, rel=1e-7)
     assert abs(level.omega_rad_s / 0.5 - 1) > 0.005  # what taking the camera as level costs here
     samples = pd.DataFrame({"track": 0, "time_s": time_s, "offset_px": offset})
     # the joint fit's linear form agrees: its misfit vanishes at the true rate only with the elevation
-    from rotrate_cli.joint import track_misfits
-    assert track_misfits(samples, 0.5, rates.Camera(focal_px, 0.0, depth_scale))[0] == pytest.approx(0.0, abs=1e-9)
-    assert track_misfits(samples, 0.5, rates.Camera(focal_px, 0.0))[0] > 1e-3
+    from rotrate_cli.fitting.joint import track_misfits
+    assert track_misfits(samples, 0.5, Camera(focal_px, 0.0, depth_scale))[0] == pytest.approx(0.0, abs=1e-9)
+    assert track_misfits(samples, 0.5, Camera(focal_px, 0.0))[0] > 1e-3
 
 
 def _weak_clockwise_tracks(rng: np.random.Generator, focal_px: float) -> pd.DataFrame:
@@ -132,8 +135,8 @@ def _weak_clockwise_tracks(rng: np.random.Generator, focal_px: float) -> pd.Data
 
 def test_body_wide_sense_from_many_weak_tracks(rng: np.random.Generator) -> None:
     focal_px = 1500.0
-    camera = rates.Camera(focal_px, 0.0)
-    fits = rates.fit_tracks(_weak_clockwise_tracks(rng, focal_px), camera=camera)
+    camera = Camera(focal_px, 0.0)
+    fits = estimators.fit_tracks(_weak_clockwise_tracks(rng, focal_px), camera=camera)
     assert all(fit.sense == -1 for fit in fits.values())
     assert np.median([fit.omega_rad_s for fit in fits.values()]) == pytest.approx(0.7, rel=0.01)
 
@@ -144,11 +147,11 @@ def test_a_sense_the_view_told_is_the_one_fitted(rng: np.random.Generator) -> No
     lens's fit tells the sense from the way the paths go round, and the tracks are fitted in it."""
     focal_px = 1500.0
     samples = _weak_clockwise_tracks(rng, focal_px)
-    told = rates.fit_tracks(samples, camera=rates.Camera(focal_px, 0.0, sense=-1))
+    told = estimators.fit_tracks(samples, camera=Camera(focal_px, 0.0, sense=-1))
     assert all(fit.sense == -1 for fit in told.values())
     assert np.median([fit.omega_rad_s for fit in told.values()]) == pytest.approx(0.7, rel=0.01)
     # told the other sense, the tracks are fitted in it (and fit worse): the view's word is kept
-    wrong = rates.fit_tracks(samples, camera=rates.Camera(focal_px, 0.0, sense=1))
+    wrong = estimators.fit_tracks(samples, camera=Camera(focal_px, 0.0, sense=1))
     assert all(fit.sense == 1 for fit in wrong.values())
     assert (np.median([fit.rms_residual for fit in wrong.values()])
             > np.median([fit.rms_residual for fit in told.values()]))
@@ -169,11 +172,11 @@ def _pinhole_tracks(rng: np.random.Generator, count: int, omega: float, focal_px
 
 
 def _senses(omega: float, count: int, trials: int) -> list[float]:
-    camera = rates.Camera(500.0, 0.0)
+    camera = Camera(500.0, 0.0)
     rng = np.random.default_rng(17)
     senses = []
     for _ in range(trials):
-        told = {fit.sense for fit in rates.fit_tracks(_pinhole_tracks(rng, count, omega), camera=camera).values()
+        told = {fit.sense for fit in estimators.fit_tracks(_pinhole_tracks(rng, count, omega), camera=camera).values()
                 if math.isfinite(fit.omega_rad_s)}
         assert len(told) == 1  # one body, one sense (or NaN for all)
         senses.append(told.pop())
@@ -199,7 +202,7 @@ def test_an_undecided_sense_reads_alike_both_ways_round() -> None:
     tell the sense read the same rate, midway between the two senses' rates, within the same
     interval, which holds the truth: nothing depends on which sense is the default (the
     anticlockwise one's rate was the point: 0.205 rad/s for the clip, 0.185 for its mirror)."""
-    camera = rates.Camera(500.0, 0.0)
+    camera = Camera(500.0, 0.0)
     tracks = _pinhole_tracks(np.random.default_rng(5), 80, 0.2)
     tracks["frame"] = np.round(tracks["time_s"] * 30).astype(int)
     mirror = tracks.assign(offset_px=-tracks["offset_px"])
@@ -236,7 +239,7 @@ def test_an_undecided_sense_is_the_one_the_near_side_travels(seed: int, omega: f
     of an opaque body, travel one way (the paper's rule), the rate is that sense's, and the
     interval still holds the other's: midway, these read 0.249 and 0.229 rad/s for 0.2."""
     result = rates_from_offsets(_near_side_tracks(np.random.default_rng(seed), 80, omega), "fit", RejectionConfig(),
-                                rates.Camera(500.0, 0.0))
+                                Camera(500.0, 0.0))
     combined = result.combined
     assert result.direction == direction
     assert combined.senses_rad_s is not None  # the fits did not tell
@@ -252,7 +255,7 @@ def test_an_undecided_sense_places_the_axis_without_the_lens() -> None:
     orthographically: the pinhole model in the wrong sense moved a fixation 10 px right of the
     axis 91 px to its left (the mirror image, the anticlockwise default); now 4 px or less
     from it, the clip and its mirror alike."""
-    camera = rates.Camera(500.0, 0.0)
+    camera = Camera(500.0, 0.0)
     tracks = _pinhole_tracks(np.random.default_rng(5), 80, 0.2)
     tracks["frame"] = np.round(tracks["time_s"] * 30).astype(int)
     for table in (tracks, tracks.assign(offset_px=-tracks["offset_px"])):
@@ -264,7 +267,7 @@ def test_an_undecided_sense_places_the_axis_without_the_lens() -> None:
         assert refine_axis_offset(offsets, omega, placing) == pytest.approx(-10.0, abs=4.0)
 
 
-def _fitted_through(tracks: pd.DataFrame, camera: rates.Camera):
+def _fitted_through(tracks: pd.DataFrame, camera: Camera):
     tracks = tracks.assign(frame=np.round(tracks["time_s"] * 30).astype(int))
     return rates_from_offsets(tracks, "fit", RejectionConfig(), camera)
 
@@ -275,14 +278,14 @@ def test_a_sense_the_user_gave_is_fitted_and_checked_against_the_tracks() -> Non
     same, or cannot tell, nothing is said."""
     tracks = _pinhole_tracks(np.random.default_rng(3), 80, 0.5)
     for told, doubted in ((1, False), (-1, True)):
-        camera = rates.Camera(500.0, 0.0, 1.0, told)
+        camera = Camera(500.0, 0.0, 1.0, told)
         result = _fitted_through(tracks, camera)
         assert result.direction == ("ccw" if told > 0 else "cw")
         doubt = told_sense_doubt(result, camera, told)
         assert (doubt is not None) == doubted
-    assert "turns ccw, not cw as --direction says" in doubt
-    right = _fitted_through(tracks, rates.Camera(500.0, 0.0, 1.0, 1)).combined
+    assert "turns ccw, not cw as `direction` says" in doubt
+    right = _fitted_through(tracks, Camera(500.0, 0.0, 1.0, 1)).combined
     assert right.omega_low_rad_s <= 0.5 <= right.omega_high_rad_s
     weak = _pinhole_tracks(np.random.default_rng(5), 80, 0.2)  # undecided (see above)
-    camera = rates.Camera(500.0, 0.0, 1.0, -1)
+    camera = Camera(500.0, 0.0, 1.0, -1)
     assert told_sense_doubt(_fitted_through(weak, camera), camera, -1) is None

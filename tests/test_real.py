@@ -50,7 +50,7 @@ def test_a_part_of_a_car_s_turn_settles_its_axis_and_says_how_well(sequence: str
     67-degree lens), timed by their EXIF clocks, the tracks alone: the axis is placed at the rate
     measured about it and the rate about the axis, which on a short arc trade off. Two plain
     moves of the axis stopped short of where they agree, with an interval that held neither."""
-    from rotrate_cli.clock import exif_times
+    from rotrate_cli.video.clock import exif_times
 
     folder = CARS / sequence
     need(folder, f"the EPFL car sequence {sequence}")
@@ -66,7 +66,7 @@ def test_a_part_of_a_car_s_turn_settles_its_axis_and_says_how_well(sequence: str
 def test_an_axis_found_from_two_tracks_leaves_the_rate_open() -> None:
     """seq02's photographs 45-74 (its parts' sweep): two tracks on the front wheel placed the axis
     on the rear one and read 0.014 rad/s within [0, 0.030], weak, the truth 0.063 outside."""
-    from rotrate_cli.clock import exif_times
+    from rotrate_cli.video.clock import exif_times
 
     folder = CARS / "seq02"
     need(folder, "the EPFL car sequence seq02")

@@ -70,8 +70,8 @@ def test_a_still_opencv_decodes_black_or_garbled_is_read_through_ffmpeg(files: d
                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
     """What OpenCV gives in the openings where the interlaced stream defeats it, made to happen:
     the still at 1 s comes mostly black from OpenCV; through FFmpeg it is the picture."""
-    from rotrate_cli.decode import FrameSource
-    from rotrate_cli.overlay import frame_at
+    from rotrate_cli.output.overlay import frame_at
+    from rotrate_cli.video.decode import FrameSource
 
     source = FrameSource(files["interlaced.mp4"])
     opencv_frames = FrameSource._video_frames
@@ -90,7 +90,7 @@ def test_a_still_opencv_decodes_black_or_garbled_is_read_through_ffmpeg(files: d
 
 
 def test_ffmpeg_tells_an_interlaced_stream(files: dict[str, Path]) -> None:
-    from rotrate_cli.pipe import ffmpeg_program, interlaced
+    from rotrate_cli.video.pipe import ffmpeg_program, interlaced
 
     program = ffmpeg_program()
     assert program is not None
@@ -103,7 +103,7 @@ def test_interlaced_without_ffmpeg_is_measured_or_explained(files: dict[str, Pat
                                                              monkeypatch: pytest.MonkeyPatch) -> None:
     # OpenCV decodes such a file black in some openings and not in others: either the run
     # measures it, or it stops with one line that says what to do; never "no point could be tracked"
-    monkeypatch.setattr("rotrate_cli.pipe.ffmpeg_program", lambda: None)
+    monkeypatch.setattr("rotrate_cli.video.pipe.ffmpeg_program", lambda: None)
     result = runner.invoke(app, ["analyze", str(files["interlaced.mp4"]), *FIXATION, "-f", "json"])
     if result.exit_code == 0:
         assert '"omega": 0.6' in result.stdout or '"omega": 0.59' in result.stdout
@@ -153,7 +153,7 @@ def test_a_stream_copied_trim_is_not_called_cut_off(files: dict[str, Path]) -> N
 
 def test_an_opencv_without_its_logging_module_still_decodes(monkeypatch: pytest.MonkeyPatch) -> None:
     # OpenCV 4.9-4.12 have no cv2.utils.logging; the luma path used it on every frame
-    from rotrate_cli.decode import FrameSource
+    from rotrate_cli.video.decode import FrameSource
 
     monkeypatch.setattr(cv2, "utils", object(), raising=False)
     frames = list(FrameSource(BOX).frames(grey=True, end_s=0.5))
@@ -164,7 +164,7 @@ def test_frozen_frames_from_opencv_are_read_again_through_ffmpeg(files: dict[str
                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
     # some openings of an interlaced file give one garbled picture, over and over: as if
     # OpenCV did so on every opening, the run reads the file again through FFmpeg
-    from rotrate_cli import decode
+    from rotrate_cli.video import decode
 
     garbled = np.random.default_rng(0).integers(0, 255, (360, 640, 3), dtype=np.uint8)
 

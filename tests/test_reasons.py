@@ -1,4 +1,4 @@
-"""Rejected tracks named by where they are (rotrate_cli.reasons): reflections stand still on the
+"""Rejected tracks named by where they are (rotrate_cli.scene.reasons): reflections stand still on the
 turning body, slides move on it at the wrong rate, other motion happens off it."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from rotrate_cli.reasons import name_rejections, track_places
+from rotrate_cli.scene.reasons import name_rejections, track_places
 
 
 def _case() -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from rotrate_cli import AnalysisConfig, analyze
-from rotrate_cli.synth import SceneConfig, write_clip
+from rotrate_cli.video.synth import SceneConfig, write_clip
 
 CASES = {
     "slow-spin-cylinder": SceneConfig(shape="cylinder", omega_rad_s=0.1, duration_s=10, fps=15, seed=11),

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from rotrate_cli import AnalysisConfig, analyze
 from rotrate_cli.cli import app
-from rotrate_cli.segment import segment_tracks
+from rotrate_cli.fitting.segment import segment_tracks
 from tests.conftest import SAMPLES, truth_of
 
 TWO = SAMPLES / "two_bodies.mp4"
@@ -103,7 +103,7 @@ def test_a_group_that_measures_like_a_larger_body_is_not_a_body_of_its_own() -> 
     # body's (1.57 rad/s); within the resolution, so not reported as a second body
     from types import SimpleNamespace
 
-    from rotrate_cli.bodies import distinct_bodies
+    from rotrate_cli.stages.bodies import distinct_bodies
 
     def entry(omega: float, x_px: float) -> tuple:
         geometry = SimpleNamespace(fixation_px=(x_px, 360.0))

@@ -1,4 +1,4 @@
-"""Cuts in a clip (:mod:`rotrate_cli.shots`): found between two scenes, not in fast motion, a
+"""Cuts in a clip (:mod:`rotrate_cli.video.shots`): found between two scenes, not in fast motion, a
 shaken camera or a single flash; and a clip that opens on a still, other picture is measured on
 its longest shot."""
 
@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from rotrate_cli.shots import cuts, fades, longest_shot
+from rotrate_cli.video.shots import cuts, fades, longest_shot
 
 
 def _texture(seed: int, size: int = 64) -> np.ndarray:
@@ -83,7 +83,7 @@ def test_a_clip_that_opens_on_another_picture_is_measured_on_its_turning(tmp_pat
     measurement. After black, the light's steadying held the picture black for 5 more frames
     (brought to the recent frames' median brightness), and the cut was found 5 frames late."""
     from rotrate_cli.analysis import AnalysisConfig, analyze
-    from rotrate_cli.synth import Renderer, SceneConfig
+    from rotrate_cli.video.synth import Renderer, SceneConfig
 
     scene = SceneConfig(shape="box", omega_rad_s=0.8, fps=30.0, duration_s=3.0, supersample=1, seed=11)
     still = Renderer(SceneConfig(shape="cylinder", omega_rad_s=0.8, seed=12, supersample=1)).render(0)
@@ -137,7 +137,7 @@ def test_a_clip_that_fades_in_is_measured_once_its_light_is_steady(tmp_path, ove
     steadying follows a fade a few frames behind. Over 2 s, from 30% (no cut shows), -3.4% within
     [-40%, +33%]."""
     from rotrate_cli.analysis import AnalysisConfig, analyze
-    from rotrate_cli.synth import Renderer, SceneConfig
+    from rotrate_cli.video.synth import Renderer, SceneConfig
 
     scene = SceneConfig(shape="box", omega_rad_s=0.6, fps=30.0, duration_s=4.0, supersample=1, seed=5)
     renderer = Renderer(scene)

@@ -1,4 +1,4 @@
-"""A hand-held camera's shake taken out of the tracks (:mod:`rotrate_cli.steady`)."""
+"""A hand-held camera's shake taken out of the tracks (:mod:`rotrate_cli.tracking.steady`)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rotrate_cli.steady import find_shake
+from rotrate_cli.tracking.steady import find_shake
 
 
 def _shake(frames: int, amplitude_px: float, turn_deg: float, seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
@@ -80,7 +80,7 @@ def test_a_shaken_render_is_measured_as_from_a_tripod(tmp_path: Path) -> None:
     """A rendered box at 0.5 rad/s whose picture shakes by 3 px and 0.3 degrees: without the
     shake taken out it read 0.01 to 0.31 rad/s, weak."""
     from rotrate_cli.analysis import AnalysisConfig, analyze
-    from rotrate_cli.synth import Renderer, SceneConfig
+    from rotrate_cli.video.synth import Renderer, SceneConfig
 
     scene = SceneConfig(shape="box", omega_rad_s=0.5, fps=30.0, duration_s=4.0, supersample=1, seed=5)
     renderer = Renderer(scene)
@@ -126,7 +126,7 @@ def test_a_face_whose_points_come_late_is_not_taken_for_a_shaking_camera(tmp_pat
     0.02-0.18 px after: their rms, 0.81 px, was a hand's jolt). Taken for a shake, the turn was
     taken out and the rate read -33%, its interval missing the truth."""
     from rotrate_cli.analysis import AnalysisConfig, analyze
-    from rotrate_cli.synth import SceneConfig, write_clip
+    from rotrate_cli.video.synth import SceneConfig, write_clip
 
     clip = tmp_path / "top.mp4"
     write_clip(SceneConfig(shape="box", omega_rad_s=0.2, fps=24.0, duration_s=2.0, elevation_deg=60.0,

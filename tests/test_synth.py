@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotrate_cli.synth import Renderer, SceneConfig
+from rotrate_cli.video.synth import Renderer, SceneConfig
 
 SCENES = {
     "box through a lens from above": SceneConfig(shape="box", omega_rad_s=0.5, projection="perspective", fov_deg=60.0,

@@ -6,9 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from rotrate_cli.decode import Frame
-from rotrate_cli.synth import Renderer, SceneConfig
-from rotrate_cli.tracking import (
+from rotrate_cli.tracking.klt import (
     NEIGHBOUR_RADIUS_PX,
     NEIGHBOUR_RMS_PX,
     NEIGHBOURS,
@@ -21,6 +19,8 @@ from rotrate_cli.tracking import (
     tracking_image,
     tracking_scale,
 )
+from rotrate_cli.video.decode import Frame
+from rotrate_cli.video.synth import Renderer, SceneConfig
 
 
 @pytest.fixture(scope="module")
@@ -75,10 +75,10 @@ def test_reduced_tracking_image_reports_full_resolution(sphere: tuple[Renderer, 
 
 
 def test_store_spanning_many_blocks_gives_the_tidy_table(monkeypatch: pytest.MonkeyPatch) -> None:
-    from rotrate_cli import tracking
+    from rotrate_cli.tracking import klt
 
-    monkeypatch.setattr(tracking, "_BLOCK_SAMPLES", 7)  # frames straddle blocks
-    store = tracking._Tracks()
+    monkeypatch.setattr(klt, "_BLOCK_SAMPLES", 7)  # frames straddle blocks
+    store = klt._Tracks()
     rng = np.random.default_rng(3)
     expected = []
     alive = np.arange(5)
@@ -103,7 +103,7 @@ def test_store_spanning_many_blocks_gives_the_tidy_table(monkeypatch: pytest.Mon
 def test_a_long_clips_store_keeps_every_other_track_once_full() -> None:
     """Memory stays bounded on a long clip: past the cap, the store keeps the tracks whose id is a
     multiple of 2, then 4..., evenly over the clip, old and new alike."""
-    from rotrate_cli.tracking import _Tracks
+    from rotrate_cli.tracking.klt import _Tracks
 
     store = _Tracks(max_samples=1000)
     for frame in range(100):  # 20 live tracks a frame, each lasting 10 frames
@@ -142,7 +142,7 @@ def test_a_light_flickering_with_the_mains_leaves_the_rate_as_it_was(tmp_path) -
     import math
 
     from rotrate_cli.analysis import AnalysisConfig, analyze
-    from rotrate_cli.synth import Renderer, SceneConfig
+    from rotrate_cli.video.synth import Renderer, SceneConfig
 
     scene = SceneConfig(shape="box", omega_rad_s=0.5, fps=30.0, duration_s=3.0, supersample=1, seed=4)
     renderer = Renderer(scene)
@@ -165,7 +165,7 @@ def test_a_slow_turn_is_tracked(tmp_path, omega_rad_s: float, seed: int) -> None
     4 apart differed too little to show where the body was (now compared with frames far enough
     back for the points to have stepped 2 px)."""
     from rotrate_cli.analysis import AnalysisConfig, analyze
-    from rotrate_cli.synth import SceneConfig, write_clip
+    from rotrate_cli.video.synth import SceneConfig, write_clip
 
     scene = SceneConfig(shape="box", omega_rad_s=omega_rad_s, fps=30.0, duration_s=8.0, width_px=480, height_px=270,
                         noise_sigma=1.0, supersample=1, seed=seed)
@@ -283,24 +283,24 @@ def test_videos_are_followed_with_the_window_laid_along_the_rows_and_stills_as_g
     """By source, as the tracker's other choices (see TrackerConfig.laid_along_rows)."""
     from pathlib import Path
 
-    from rotrate_cli import footage
     from rotrate_cli.config import AnalysisConfig
+    from rotrate_cli.stages import tracks
 
     chosen = []
-    follow = footage.track_frames
+    follow = tracks.track_frames
 
     def noted(stream, size_px, config, *args, **kwargs):
         chosen.append(config.laid_along_rows)
         return follow(stream, size_px, config, *args, **kwargs)
 
-    monkeypatch.setattr(footage, "track_frames", noted)
+    monkeypatch.setattr(tracks, "track_frames", noted)
     clip = Path(__file__).resolve().parents[1] / "sample_videos" / "box_ortho.mp4"
-    footage.read_footage(clip, AnalysisConfig(fixation_px=(319.5, 179.5), end_s=1.0))
+    tracks.read_footage(clip, AnalysisConfig(fixation_px=(319.5, 179.5), end_s=1.0))
     capture = cv2.VideoCapture(str(clip))
     for index in range(12):
         ok, image = capture.read()
         assert ok
         cv2.imwrite(str(tmp_path / f"still{index:02d}.png"), image)
     capture.release()
-    footage.read_footage(tmp_path, AnalysisConfig(fixation_px=(319.5, 179.5), fps=30.0))
+    tracks.read_footage(tmp_path, AnalysisConfig(fixation_px=(319.5, 179.5), fps=30.0))
     assert chosen[0] is True and chosen[-1] is False

@@ -1,4 +1,4 @@
-"""The view from the tracks' paths (rotrate_cli.view): elevation, turning centre and the rate
+"""The view from the tracks' paths (rotrate_cli.scene.view): elevation, turning centre and the rate
 in both image coordinates, on paths computed exactly, with the kinds of false tracks real
 footage has (still glints, points sliding a few pixels along a rim)."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rotrate_cli.view import keep_for_view, rate_from_paths, view_from_paths
+from rotrate_cli.scene.view import keep_for_view, rate_from_paths, view_from_paths
 
 CENTRE = (400.0, 250.0)
 
@@ -92,10 +92,10 @@ def test_keep_for_view_keeps_the_longest_tracks_thinned() -> None:
 def test_through_a_lens_found_the_view_takes_the_lens_fits_elevation(monkeypatch) -> None:
     """The paths read their ellipses as seen from far away (50 degrees for a render 60 degrees
     above through a 65-degree lens); the lens's fit read 59, and the report said both, in two rows."""
-    import rotrate_cli.geometry as geometry_stage
-    from rotrate_cli.camera import Lens
-    from rotrate_cli.focal import FocalEstimate
-    from rotrate_cli.view import View
+    import rotrate_cli.stages.geometry as geometry_stage
+    from rotrate_cli.scene.focal import FocalEstimate
+    from rotrate_cli.scene.view import View
+    from rotrate_cli.stages.camera import Lens
 
     paths = View(50.0, (232.0, 134.0), 3.0, 211, 137.0, 0.0)
     monkeypatch.setattr(geometry_stage, "view_from_paths", lambda tracks, omega: paths)

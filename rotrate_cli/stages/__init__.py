@@ -1,0 +1,1 @@
+"""The pipeline stages (listed in pipeline order below)."""

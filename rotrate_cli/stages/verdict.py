@@ -1,0 +1,260 @@
+"""The judged estimate: the tracks' rate and the clip's repetition weighed into one number, and
+how far it can be trusted.
+
+Two measurements can stand behind a result. The tracks' fits (:mod:`rotrate_cli.fitting.estimators`) work on
+any length of clip but rest on a model of the projection and on every kept track lying on the
+body; on real footage (mirroring paint, grooves that slide under the tracker, people moving
+behind) they can be biased while their interval stays narrow. The repetition
+(:mod:`rotrate_cli.stages.period`) needs about a turn but no model at all. Where both exist:
+
+- the tracks' rate, when it is informative (its interval within :data:`INFORMATIVE_HALF_WIDTH`),
+  says how many repeats make a turn (an object with an m-fold symmetry repeats m times);
+- the result is the repetition's, which is the more precise and the less biased;
+- where no whole number of repeats fits inside an informative tracks' interval, the two
+  disagree: the repetition's rate stands, one repeat a turn, and a note says so; when the
+  tracks lie near a whole number of repeats from 2 to :data:`MOST_SYMMETRY` (within
+  :data:`NEAR_FACTOR`), the object
+  may be symmetric and the result is marked weak.
+
+Where the picture changes almost wholly from one frame to the next (a fast wheel, a fan; or a fine
+texture), its repeat is told only up to whole turns between frames
+(:attr:`rotrate_cli.stages.period.Period.far_apart`): the tracks count the turns where they gave a rate
+(:func:`turns_between`), and unless their interval tells the count, the result is weak.
+
+A picture that comes back only once in the clip may be a view that merely looks alike part of a
+turn on (a car's far side half a turn on), not a turn: where it does not come back exactly
+(:data:`LOOK_ALIKE_EXCESS`), or the tracks turn well under a turn in that time
+(:data:`UNDER_TURN`), and informative tracks do not confirm it, the result is weak. Where the
+tracks gave a rate there, either reading may be the truth: the 95% interval spans both (the
+repetition's, and the tracks' interval), and an inexact return gives way to the tracks' rate (on the
+EPFL cars' first 50-70 photographs the return read +91% to +101%, the tracks -1% to -53%).
+
+The quality is ``weak`` when the interval is wider than :data:`WEAK_HALF_WIDTH` of the rate,
+when fewer than :data:`MIN_TRACKS` tracks stand behind a tracks-only result, or when the
+measurements disagree; each reason is given.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from rotrate_cli.fitting.outliers import Combined
+from rotrate_cli.stages.period import Period, harmonic
+
+#: An interval wider than this fraction of the rate on either side is weak evidence.
+WEAK_HALF_WIDTH = 0.05
+#: The tracks' rate tells the number of repeats a turn only when its interval is this narrow (and
+#: enough tracks stand behind it): on the record clip with the truth's fixation the tracks said
+#: 1.8 rad/s +-20%, which holds half the true rate: a looser rule took two repeats a turn.
+INFORMATIVE_HALF_WIDTH = 0.05
+#: A tracks-only result needs this many consistent tracks to be called good.
+MIN_TRACKS = 5
+#: Where the tracks and the repetition disagree, tracks within this factor of a whole number
+#: (above one) of repeats a turn make the result weak: the object may be symmetric.
+NEAR_FACTOR = 1.1
+#: Beyond this many repeats a turn, whole numbers lie so close that being near one says nothing.
+MOST_SYMMETRY = 6
+
+#: A picture that comes back only once in the clip, with its closest pairs differing by more than
+#: this (in typical differences, :attr:`rotrate_cli.stages.period.Period.excess`) beyond what their
+#: timing explains, may be a look-alike view rather than a turn. Measured on the EPFL cars: their
+#: full turns' single closings differ by 0.00-0.11; the views half a turn to three quarters on
+#: that looked alike (clips of 40-80 of their 96-120 photographs) by 0.19-0.38, and read twice
+#: the rate, as good, before this rule.
+LOOK_ALIKE_EXCESS = 0.15
+#: ... and where the tracks turn this many times slower than a turn a period (the top of their
+#: interval): the same clips timed by their EXIF clocks match their look-alike views as closely
+#: as true turns (0.10), but their tracks turn at a quarter to two fifths of the repetition's rate.
+UNDER_TURN = 1.5
+
+#: Halves of the clip whose repeats differ by more than this fraction show a changing rate.
+CHANGE_FRACTION = 0.01
+
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The rate reported, where it comes from, and how far to trust it.
+
+    Attributes:
+        omega_rad_s, omega_low_rad_s, omega_high_rad_s: the rate and its 95% interval (rad/s).
+        rate_from: ``tracks`` or ``repetition``.
+        repeats_per_turn: with the repetition, how many repeats make a turn (1 usually).
+        quality: ``good`` or ``weak``.
+        weak_because: why it is weak (empty when good).
+        notes: what the user should know about how the two measurements compared.
+    """
+
+    omega_rad_s: float
+    omega_low_rad_s: float
+    omega_high_rad_s: float
+    rate_from: str
+    repeats_per_turn: int
+    quality: str
+    weak_because: tuple[str, ...]
+    notes: tuple[str, ...]
+
+
+def _half_width(omega: float, low: float, high: float) -> float:
+    """The interval's larger half as a fraction of the rate (inf when unknown)."""
+    if not (math.isfinite(omega) and omega > 0 and math.isfinite(low) and math.isfinite(high)):
+        return math.inf
+    return max(omega - low, high - omega) / omega
+
+
+def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
+          doubts: tuple[str, ...] = ()) -> Verdict:
+    """The reported rate from the tracks' combined rate (None: no track gave one) and the
+    clip's repetition (None: none seen); ``tracks_used`` tracks stand behind ``tracks``;
+    ``doubts`` about the tracks' rate (a given fixation the tracks disagree with) make a
+    tracks-only result weak and are notes beside the repetition's.
+
+    Raises:
+        ValueError: neither measurement is given.
+    """
+    if period is None:
+        if tracks is None:
+            raise ValueError("no measurement to judge")
+        return _tracks_only(tracks, tracks_used, doubts)
+    notes: list[str] = list(doubts)
+    weak: list[str] = []
+    repeats, confirmed = 1, False
+    if (tracks is not None and math.isfinite(tracks.omega_rad_s) and tracks.omega_rad_s > 0
+            and tracks_used >= MIN_TRACKS):
+        spread = _half_width(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s)
+        if spread <= INFORMATIVE_HALF_WIDTH:
+            found = harmonic(period, tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s)
+            if found is None:
+                nearest = max(1, round(period.omega_rad_s()[0] / tracks.omega_rad_s))
+                ratio = period.omega_rad_s(nearest)[0] / tracks.omega_rad_s
+                disagreement = (f"the tracks' rate ({tracks.omega_rad_s:.4g} rad/s) disagrees with the clip's "
+                                f"repetition ({period.omega_rad_s()[0]:.4g} rad/s a repeat)")
+                if 1 < nearest <= MOST_SYMMETRY and 1 / NEAR_FACTOR <= ratio <= NEAR_FACTOR:
+                    # near a whole number of repeats: a symmetric object, or tracks gone astray
+                    weak.append(f"{disagreement}; the object may repeat {nearest} times a turn")
+                else:
+                    notes.append(f"{disagreement}; the repetition is reported: on real footage tracks "
+                                 "that slide or mirror can bias a rate while a picture's return cannot")
+            else:
+                repeats, confirmed = found, True
+                if repeats > 1:
+                    notes.append(f"the picture repeats {repeats} times a turn (a symmetric object); "
+                                 "the tracks' rate tells which")
+    omega, low, high = period.omega_rad_s(repeats)
+    rate_from, spanned = "repetition", False
+    if period.far_apart and not confirmed and not _tracks_count_turns(period, omega, tracks, tracks_used):
+        # how many repeats the closest return spans is a guess: the interval holds every count,
+        # from one to under half a repeat a frame (rendered boxes at 10 and 25 rad/s, 30 frames/s,
+        # no track: the guesses read +100% and +255%)
+        weak.append(_far_apart(period))
+        most = max(1, int(period.lag_frames * period.turns_between / 2))
+        low = min(low, period.over(1).omega_rad_s(repeats)[1])
+        high = max(high, period.over(most).omega_rad_s(repeats)[2])
+        spanned = True
+    if not confirmed:
+        doubt = _look_alike(period, tracks, tracks_used)
+        if doubt is not None:
+            weak.append(doubt)
+            if tracks is not None and tracks_used >= MIN_TRACKS and 0 < tracks.omega_rad_s < math.inf:
+                # a turn or a look-alike view: the interval holds both readings, and an inexact
+                # return stands for a look-alike (the tracks' rate is reported)
+                repeated = omega
+                low, high = min(low, tracks.omega_low_rad_s), max(high, tracks.omega_high_rad_s)
+                spanned = True
+                if period.excess > LOOK_ALIKE_EXCESS:
+                    omega, rate_from = tracks.omega_rad_s, "tracks"
+                reported = ("the tracks' rate is reported, as the return is not exact" if rate_from == "tracks"
+                            else "the repetition's rate is reported, as the return is exact")
+                notes.append(f"the 95% interval spans both readings: the repetition's {repeated:.4g} rad/s if the "
+                             f"picture's return is a turn, the tracks' {tracks.omega_rad_s:.4g} rad/s if it is a "
+                             f"look-alike view; {reported}")
+    if period.drift_s > CHANGE_FRACTION * period.period_s:
+        notes.append(f"the rate changes over the clip (its halves repeat {period.drift_s / period.period_s:.1%} "
+                     "apart); the result is an average: see omega(t) with `window_s`")
+    if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not spanned:  # spanned: weak for its doubt already
+        weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
+    return Verdict(omega, low, high, rate_from, repeats, "weak" if weak else "good", tuple(weak), tuple(notes))
+
+
+def turns_between(period: Period, tracks: Combined | None, tracks_used: int = 0) -> Period:
+    """The repetition with the number of repeats its closest return spans taken, where its frames
+    lie far apart on the turn (:attr:`rotrate_cli.stages.period.Period.far_apart`): as the tracks' rate
+    says where they gave one (points followed from frame to frame turned by small steps), else
+    as the lag profile alone says. A finely textured sphere turning 6 degrees a frame changes as
+    wholly from one frame to the next as a box turning 29: the profile took two turns for its
+    one (+100%), its tracks one."""
+    if not period.far_apart:
+        return period
+    if tracks is not None and tracks_used >= MIN_TRACKS and 0 < tracks.omega_rad_s < math.inf:
+        most = max(1, int(period.lag_frames * period.turns_between / 2))
+        spans = tracks.omega_rad_s / period.over(1).omega_rad_s()[0]
+        return period.over(min(max(1, round(spans)), most))
+    return period.over(period.turns_guess)
+
+
+def _tracks_count_turns(period: Period, omega_rad_s: float, tracks: Combined | None, tracks_used: int) -> bool:
+    """True where the tracks' interval, if not narrow enough to confirm the rate (or off it), still
+    tells how many repeats a return far apart spans: it lies within half a repeat of the rate (a
+    rendered sphere through a 50-degree lens: its tracks' 3.67 rad/s, +22%, tell one turn from two
+    of the repetition's 3.00)."""
+    if tracks is None or tracks_used < MIN_TRACKS or not 0 < tracks.omega_rad_s < math.inf:
+        return False
+    turns = period.turns_between
+    return omega_rad_s * (turns - 0.5) / turns < tracks.omega_low_rad_s <= tracks.omega_high_rad_s < (
+        omega_rad_s * (turns + 0.5) / turns)
+
+
+def _far_apart(period: Period) -> str:
+    """Why a repetition of frames far apart on the turn, unconfirmed by tracks, is weak."""
+    spans = (f"; its closest return, after {period.turns_between} repeats, says how far" if period.turns_between > 1
+             else "")
+    return (f"the picture changes almost wholly from one frame to the next (the repeat turns about "
+            f"{period.step_deg:.0f} degrees a frame{spans}): how many repeats its closest return spans is a guess, "
+            "and no track tells it; the 95% interval holds every count up to half a repeat a frame, and a turn "
+            "faster by whole turns a frame looks the same (a wagon wheel's); a higher frame rate settles it")
+
+
+def _look_alike(period: Period, tracks: Combined | None, tracks_used: int) -> str | None:
+    """Why a repetition seen only once may be a look-alike view rather than a turn: its closest
+    pairs differ beyond what their timing explains by more than :data:`LOOK_ALIKE_EXCESS`, or
+    the tracks say the clip turned well under a turn in that time (the period is more than
+    :data:`UNDER_TURN` times shorter than even the top of their interval makes a turn); None
+    where neither holds."""
+    if not period.frames < 2 * period.lag_frames:  # the clip holds a second return (or could)
+        return None
+    omega = period.omega_rad_s()[0]
+    said = f"the picture comes back only once in the clip (after {period.period_s:.4g} s)"
+    if period.excess > LOOK_ALIKE_EXCESS:
+        return (f"{said}, and not exactly: it may be a view that looks alike part of a turn on (a car half a "
+                "turn on) rather than a turn; a clip of two turns or more settles it")
+    if (tracks is not None and tracks_used >= MIN_TRACKS and math.isfinite(top := _tracks_top(tracks))
+            and 0 < top * UNDER_TURN < omega):
+        turned = tracks.omega_rad_s * period.period_s / (2.0 * math.pi)
+        return (f"{said}, but the tracks turn only {turned:.0%} of a turn in that time ({tracks.omega_rad_s:.4g} "
+                "rad/s): it may be a view that looks alike part of a turn on (a car half a turn on); a clip of "
+                "two turns or more settles it")
+    return None
+
+
+def _tracks_top(tracks: Combined) -> float:
+    """The top of the tracks' interval; where their fits through a lens did not tell the sense
+    and the near side's travel did (:attr:`rotrate_cli.fitting.outliers.Combined.seen_sense`), of that
+    sense's own interval: the other sense's rate, which the interval also holds, is the
+    alternative to the travel's physics, not a measurement of how far the body turned. The
+    first 50 photographs of EPFL car 02, clockwise: its tracks 0.053 rad/s within [0.041, 0.143]
+    with the anticlockwise 0.092, and its picture back after 52 s (0.121 rad/s, a look-alike
+    half a turn on), exactly enough to pass for a turn."""
+    if tracks.seen_sense and tracks.seen_interval_rad_s is not None:
+        return tracks.seen_interval_rad_s[1]
+    return tracks.omega_high_rad_s
+
+
+def _tracks_only(tracks: Combined, tracks_used: int, doubts: tuple[str, ...]) -> Verdict:
+    weak = list(doubts)
+    if _half_width(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s) > WEAK_HALF_WIDTH:
+        weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
+    if tracks_used < MIN_TRACKS:
+        weak.append(f"only {tracks_used} track(s) agree")
+    return Verdict(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s, "tracks", 1,
+                   "weak" if weak else "good", tuple(weak), ())

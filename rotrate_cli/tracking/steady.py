@@ -1,0 +1,265 @@
+"""A hand-held camera's shake, taken out of the tracks (:func:`hold_still`).
+
+A camera held in the hand moves the whole picture by a few pixels from frame to frame. Every
+tracked point carries that motion on top of its own, and a fit of a turn to an offset that
+jumps by 2 px in a 6-second clip fails outright (a rendered box at 0.5 rad/s, its picture
+shaken by 2 px and 0.2 degrees: 0.01 rad/s, weak, its interval missing the truth).
+
+The still background shows the shake alone. Its points are the long tracks that move together:
+the camera's path is the median step of those tracks frame by frame, summed, and a track is
+background where, less that path, it stands still. The two are found in turn, from all long
+tracks. On a tripod the tracker has already let go of still points (they say nothing about the
+turn), so no background is left and nothing changes; where the tracks that move together do not
+stand still once the path is taken out (the body's own points, a close-up with no background),
+nothing changes either.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rotrate_cli.runtime.lazy import pandas as pd
+
+#: A background track lasts at least this fraction of the clip's frames (and
+#: :data:`MIN_FRAMES`): short tracks cannot tell a still point from a slow one.
+LONG_FRACTION = 0.5
+MIN_FRAMES = 10
+#: At least this many background tracks, or nothing is taken out.
+MIN_BACKGROUND = 12
+#: Less the camera's path, a background track stays within this many tracking pixels rms of its
+#: mean position.
+STILL_PX = 1.0
+#: A camera path whose rms about its mean is under this many tracking pixels is no shake.
+SHAKE_PX = 0.3
+#: ... nor one whose frame-to-frame change of step (rms, tracking pixels) is under this: a hand's
+#: shake jolts, while points of a turning body move smoothly together.
+JOLT_PX = 0.15
+#: ... and the jolts must stand this many times above the path's own noise, and be this share of
+#: the path's rms at least. Points of a turning body that move together (the top of a cylinder
+#: seen from 60 degrees above turns as one picture) give a smooth path, 10-19 px rms, whose
+#: jolts are its noise (0.16 px, 0.01 of its rms): on two such renders the shake "found" took
+#: the body's turn out. A hand's: a rendered 2-7 px shake, 0.9 of its rms.
+JOLT_NOISE = 3.0
+JOLT_SHARE = 0.05
+#: The rms of a two-dimensional normal error over the median of its sizes: sqrt(2) / sqrt(2 ln 2).
+RMS_PER_MEDIAN = 1.0 / math.sqrt(math.log(2.0))
+#: Rounds of (path, background) found in turn.
+ROUNDS = 4
+
+
+@dataclass(frozen=True)
+class Shake:
+    """The camera's own motion as the still background showed it.
+
+    Attributes:
+        rms_px: the camera path's rms about its mean, full-resolution pixels.
+        largest_px: its largest distance from its mean.
+        jolt_px: its typical change of step from one frame to the next, as an rms (the median
+            of their sizes, scaled; see :func:`_typical_jolt`).
+        background_tracks: tracks that showed it.
+    """
+
+    rms_px: float
+    largest_px: float
+    jolt_px: float
+    background_tracks: int
+
+
+def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0) -> tuple[CameraPath, Shake] | None:
+    """The camera's motion and its size, from ``tracks`` (``frame, track, x_px, y_px``, sorted by
+    track then frame) over ``frames`` frames; None where no shake shows (see the module's notes).
+    ``pixel_px``: a tracking-image pixel in the tracks' pixels."""
+    if tracks.empty:
+        return None
+    track = tracks["track"].to_numpy()
+    frame = tracks["frame"].to_numpy()
+    counts = np.bincount(track)
+    long_ids = np.flatnonzero(counts >= max(MIN_FRAMES, LONG_FRACTION * frames))
+    if len(long_ids) < MIN_BACKGROUND:
+        return None
+    rows = np.isin(track, long_ids)
+    sub_track, sub_frame = track[rows], frame[rows]
+    x = tracks["x_px"].to_numpy(dtype=np.float64)[rows]
+    y = tracks["y_px"].to_numpy(dtype=np.float64)[rows]
+    first, last = int(frame.min()), int(frame.max())
+    # steps within a track between consecutive frames, by the frame they end on
+    same = (sub_track[1:] == sub_track[:-1]) & (sub_frame[1:] == sub_frame[:-1] + 1)
+    steps = _Steps(sub_frame[1:][same] - first, x[:-1][same], y[:-1][same], x[1:][same], y[1:][same],
+                   last - first + 1, first)
+    step_index = np.searchsorted(long_ids, sub_track[1:][same])
+    # first the median step of all long tracks (the background is most of them where there is
+    # one), then in turn the picture's turn and shift from the still ones and the still ones
+    path = steps.median_shift()
+    spread = _spread(sub_track, *path.undo(sub_frame, x, y))
+    background = spread <= float(np.median(spread))
+    still_px = STILL_PX * pixel_px
+    for _ in range(ROUNDS):
+        path = steps.rigid(background[step_index])
+        spread = _spread(sub_track, *path.undo(sub_frame, x, y))
+        updated = spread <= still_px
+        if updated.sum() < MIN_BACKGROUND:
+            return None
+        if (updated == background).all():
+            break
+        background = updated
+    present = np.zeros(last - first + 1, bool)
+    present[np.unique(frame) - first] = True
+    centre = np.array([float(np.mean(x)), float(np.mean(y))])
+    shifted = path.moved(centre)[present]  # where the camera's motion took the picture's middle
+    shifted -= shifted.mean(axis=0)
+    distance = np.hypot(shifted[:, 0], shifted[:, 1])
+    rms = float(np.sqrt(np.mean(distance ** 2)))
+    # a hand's shake jolts from frame to frame; a patch of the body moves smoothly with its turn
+    jolt = _typical_jolt(shifted)
+    # the path's own noise, from the background's scatter about it, jolts too (sqrt 6 for a second
+    # difference of independent errors)
+    noise = math.sqrt(6.0) * float(np.median(spread[background])) / math.sqrt(background.sum())
+    if rms < SHAKE_PX * pixel_px or jolt < max(JOLT_PX * pixel_px, JOLT_NOISE * noise, JOLT_SHARE * rms):
+        return None
+    return path, Shake(rms, float(distance.max()), jolt, int(background.sum()))
+
+
+@dataclass(frozen=True)
+class CameraPath:
+    """The camera's motion: at each frame from ``first_frame`` on, the turn and shift that carry
+    the first frame's picture onto it (``p_k = R(angle_k) p_0 + shift_k``, the tracks' pixels)."""
+
+    first_frame: int
+    angle_rad: np.ndarray
+    shift_px: np.ndarray  # frames x 2
+
+    def _at(self, frame: np.ndarray | int) -> np.ndarray | int:
+        return np.clip(np.asarray(frame) - self.first_frame, 0, len(self.angle_rad) - 1)
+
+    def undo(self, frame: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions seen at frames ``frame`` carried back to the first frame's picture."""
+        at = self._at(frame)
+        angle, shift = self.angle_rad[at], self.shift_px[at]
+        cos, sin = np.cos(angle), np.sin(angle)
+        dx, dy = x - shift[..., 0], y - shift[..., 1]
+        return cos * dx + sin * dy, -sin * dx + cos * dy
+
+    def redo(self, frame: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Steadied positions at frames ``frame`` where the shaken camera saw them (undoes
+        :meth:`undo`)."""
+        at = self._at(frame)
+        angle, shift = self.angle_rad[at], self.shift_px[at]
+        cos, sin = np.cos(angle), np.sin(angle)
+        return cos * x - sin * y + shift[..., 0], sin * x + cos * y + shift[..., 1]
+
+    def seen(self, tracks: pd.DataFrame) -> pd.DataFrame:
+        """Steadied ``tracks`` (``frame, x_px, y_px``) where the shaken camera saw them: on its
+        own frames (an overlay draws them there)."""
+        x, y = self.redo(tracks["frame"].to_numpy(), tracks["x_px"].to_numpy(dtype=np.float64),
+                         tracks["y_px"].to_numpy(dtype=np.float64))
+        return tracks.assign(x_px=x.astype(tracks["x_px"].dtype), y_px=y.astype(tracks["y_px"].dtype))
+
+    def steady(self, tracks: pd.DataFrame) -> pd.DataFrame:
+        """``tracks`` (``frame, x_px, y_px``) as the camera saw them from where it stood at the
+        first analysed frame (where ``--fixation`` and ``--points`` are read)."""
+        x, y = self.undo(tracks["frame"].to_numpy(), tracks["x_px"].to_numpy(dtype=np.float64),
+                         tracks["y_px"].to_numpy(dtype=np.float64))
+        return tracks.assign(x_px=x.astype(tracks["x_px"].dtype), y_px=y.astype(tracks["y_px"].dtype))
+
+    def between(self, frame_a: int, frame_b: int, scale: float = 1.0) -> np.ndarray:
+        """The 2x3 affine matrix carrying positions in frame ``frame_a``'s picture to frame
+        ``frame_b``'s, in pixels ``scale`` times the tracks' (a tracking image's)."""
+        a, b = int(self._at(frame_a)), int(self._at(frame_b))
+        turn = float(self.angle_rad[b] - self.angle_rad[a])
+        c, s = math.cos(turn), math.sin(turn)
+        rotation = np.array([[c, -s], [s, c]])
+        shift = self.shift_px[b] - rotation @ self.shift_px[a]
+        return np.hstack([rotation, (scale * shift)[:, None]])
+
+    def moved(self, point: np.ndarray) -> np.ndarray:
+        """Where the first frame's ``point`` lies in every frame (frames x 2)."""
+        cos, sin = np.cos(self.angle_rad), np.sin(self.angle_rad)
+        return np.stack([cos * point[0] - sin * point[1], sin * point[0] + cos * point[1]], axis=1) + self.shift_px
+
+
+@dataclass(frozen=True)
+class _Steps:
+    """Tracks' steps from one frame to the next: the frame each ends on (from the first, 0),
+    where it starts and where it ends."""
+
+    frame: np.ndarray
+    x0: np.ndarray
+    y0: np.ndarray
+    x1: np.ndarray
+    y1: np.ndarray
+    frames: int
+    first_frame: int
+
+    def median_shift(self) -> CameraPath:
+        """The camera's motion as the median step into each frame, summed (no turn)."""
+        shift = np.stack([_median_by(self.frame, self.x1 - self.x0, self.frames),
+                          _median_by(self.frame, self.y1 - self.y0, self.frames)], axis=1)
+        return CameraPath(self.first_frame, np.zeros(self.frames), np.cumsum(shift, axis=0))
+
+    def rigid(self, chosen: np.ndarray) -> CameraPath:
+        """The camera's motion from the ``chosen`` steps: into each frame, the turn and shift that
+        best carry their starts onto their ends (least squares), composed frame by frame."""
+        frame = self.frame[chosen]
+        x0, y0, x1, y1 = self.x0[chosen], self.y0[chosen], self.x1[chosen], self.y1[chosen]
+        count = np.bincount(frame, minlength=self.frames).astype(np.float64)
+        has = count > 0
+        weight = np.maximum(count, 1.0)
+
+        def mean(values: np.ndarray) -> np.ndarray:
+            return np.bincount(frame, values, self.frames) / weight
+
+        ax, ay, bx, by = mean(x0), mean(y0), mean(x1), mean(y1)
+        u0, v0, u1, v1 = x0 - ax[frame], y0 - ay[frame], x1 - bx[frame], y1 - by[frame]
+        along = np.bincount(frame, u0 * u1 + v0 * v1, self.frames)
+        across = np.bincount(frame, u0 * v1 - v0 * u1, self.frames)
+        step_angle = np.where(has & (count >= 2), np.arctan2(across, along), 0.0)
+        cos, sin = np.cos(step_angle), np.sin(step_angle)
+        step_shift = np.stack([bx - (cos * ax - sin * ay), by - (sin * ax + cos * ay)], axis=1)
+        step_shift[~has] = 0.0
+        angle = np.cumsum(step_angle)
+        shift = np.zeros((self.frames, 2))
+        for k in range(1, self.frames):  # p_k = R_k p_(k-1) + s_k, from p_0
+            c, s = cos[k], sin[k]
+            shift[k] = (c * shift[k - 1, 0] - s * shift[k - 1, 1] + step_shift[k, 0],
+                        s * shift[k - 1, 0] + c * shift[k - 1, 1] + step_shift[k, 1])
+        return CameraPath(self.first_frame, angle, shift)
+
+
+def _typical_jolt(path_px: np.ndarray) -> float:
+    """The path's typical change of step from one frame to the next, as an rms: the median of
+    its sizes times :data:`RMS_PER_MEDIAN`. A hand jolts the picture all through a clip; where a
+    body's points pass for the background, the path jumps only where those points come and go
+    (a box's top seen from 60 degrees above, 0.2 rad/s: jolts of 1.3-4 px in the first 3 frames,
+    where 8 of its 38 points were followed, and 0.02-0.18 px after; their rms, 0.81 px, read as a
+    hand's shake, whose taking out turned the rate to -33%)."""
+    if len(path_px) < 3:
+        return 0.0
+    sizes = np.hypot(*np.diff(path_px, 2, axis=0).T)
+    return RMS_PER_MEDIAN * float(np.median(sizes))
+
+
+def _median_by(frame: np.ndarray, values: np.ndarray, frames: int) -> np.ndarray:
+    """The median of ``values`` at each frame (0 where there are none)."""
+    order = np.lexsort((values, frame))
+    ordered_frame, ordered = frame[order], values[order]
+    counts = np.bincount(ordered_frame, minlength=frames)
+    starts = np.r_[0, np.cumsum(counts)[:-1]]
+    median = np.zeros(frames)
+    has = counts > 0
+    low = starts[has] + (counts[has] - 1) // 2
+    high = starts[has] + counts[has] // 2
+    median[has] = 0.5 * (ordered[low] + ordered[high])
+    return median
+
+
+def _spread(track: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Each track's rms distance from its own mean position, one value per distinct track in
+    order of their numbers."""
+    _, inverse, counts = np.unique(track, return_inverse=True, return_counts=True)
+    mean_x = np.bincount(inverse, x) / counts
+    mean_y = np.bincount(inverse, y) / counts
+    squares = np.bincount(inverse, (x - mean_x[inverse]) ** 2 + (y - mean_y[inverse]) ** 2) / counts
+    return np.sqrt(squares)
