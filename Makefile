@@ -38,7 +38,7 @@ test-floor: $(FLOOR)/.installed
 
 ## docs: docs/cli.md made again from the commands' help (tests/test_docs.py fails when it is stale)
 docs: $(STAMP)
-	COLUMNS=100 $(BIN)/python -m typer rotrate_cli.cli utils docs --name rotrate > docs/cli.md
+	$(BIN)/python -m rotrate_cli.cli.docs > docs/cli.md
 
 ## lint: ruff, and the import contracts that keep machinery below the stages (import-linter, pyproject.toml)
 lint: $(STAMP)

@@ -1,15 +1,8 @@
 """The whole job in one call: :func:`analyze` for a video, :func:`analyze_tracks` for tracks.
 
-A composition of stages, top to bottom, each a function of its own module taking the previous
-stage's result:
-
-1. tracks (:func:`rotrate_cli.stages.tracks.read_footage`): decode, track, and the motion's direction;
-2. the clip's repetition (:func:`rotrate_cli.stages.period.find_period`);
-3. geometry: camera, axis and fixation (:func:`rotrate_cli.stages.geometry.locate`);
-4. fits, the fixation refined (:func:`rotrate_cli.stages.geometry.measure`), rejected tracks named
-   (:mod:`rotrate_cli.scene.reasons`) and the rate checked (:func:`rotrate_cli.stages.checks.check_rate`);
-5. the judged estimate (:func:`rotrate_cli.stages.verdict.judge`), and the view at the rate reported
-   (:func:`rotrate_cli.stages.geometry.settle_view`).
+A composition of the stages of :mod:`rotrate_cli.stages`, top to bottom, in the order that
+package lists them: tracks, period, geometry (camera, fits), checks, verdict, and the view at
+the reported rate.
 """
 
 from __future__ import annotations
@@ -48,10 +41,11 @@ from rotrate_cli.stages.fits import (
     sample_spacing,
     thin,
 )
-from rotrate_cli.stages.geometry import Geometry, locate, measure, settle_view
+from rotrate_cli.stages.geometry import Geometry, locate, measure
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
 from rotrate_cli.stages.tracks import Footage, ProgressCallback, read_footage
 from rotrate_cli.stages.verdict import Verdict, judge, turns_between
+from rotrate_cli.stages.view_at_rate import view_at_rate
 from rotrate_cli.tracking.steady import CameraPath, Shake
 
 __all__ = ["Analysis", "AnalysisConfig", "ProgressCallback", "analyze", "analyze_tracks", "rates_from_offsets",
@@ -293,7 +287,7 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     size_px = (footage.info.width_px, footage.info.height_px)
     direction, in_picture = result.direction, False
     if view_tracks is not None:
-        geometry = settle_view(geometry, view_tracks, verdict.omega_rad_s, verdict.rate_from, size_px)
+        geometry = view_at_rate(geometry, view_tracks, verdict.omega_rad_s, verdict.rate_from, size_px)
         direction, in_picture = sense_of_turning(direction, geometry.view, view_tracks, geometry.fixation_px,
                                                  verdict.omega_rad_s)
     warnings = footage.warnings + geometry.notes + notes + checked.notes + verdict.notes

@@ -150,7 +150,7 @@ def test_a_found_axis_is_moved_to_where_its_moves_end(monkeypatch: pytest.Monkey
         measured.append(point)
         return None, None
 
-    monkeypatch.setattr(geometry, "_inliers_and_rate", lambda result, camera: (None, 1.0, None))
+    monkeypatch.setattr(geometry, "inliers_and_rate", lambda result, camera: (None, 1.0, None))
     monkeypatch.setattr(geometry.axes, "refine_axis_offset", shift)
     fixation, _, _ = geometry._refine_fixation(None, None, (300.0, 100.0), 10.0, measure)
     assert (fixation[0] - 300.0) * ux + (fixation[1] - 100.0) * uy == pytest.approx(settled_px, abs=0.02)
@@ -430,8 +430,9 @@ def test_the_geometry_stage_is_one_typed_result() -> None:
     """The geometry stage on its own: the camera, axis and fixation of the perspective sample, as
     given or as found, in one Geometry; its view is read once the rate is known."""
     from rotrate_cli.scene.view import keep_for_view
-    from rotrate_cli.stages.geometry import locate, measure, settle_view
+    from rotrate_cli.stages.geometry import locate, measure
     from rotrate_cli.stages.tracks import read_footage
+    from rotrate_cli.stages.view_at_rate import view_at_rate
 
     truth = truth_of(SAMPLES / "box_perspective.mp4")
     given = AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), fov_deg=25.0)
@@ -443,7 +444,7 @@ def test_the_geometry_stage_is_one_typed_result() -> None:
     geometry, result = measure(body, geometry, given, size)
     assert geometry.fixation_px == tuple(truth["fixation_px"])  # a given fixation is not moved
     assert result.combined.omega_rad_s == pytest.approx(truth["omega_rad_s"], rel=0.01)
-    seen = settle_view(geometry, keep_for_view(footage.tracks), result.combined.omega_rad_s, "tracks", size)
+    seen = view_at_rate(geometry, keep_for_view(footage.tracks), result.combined.omega_rad_s, "tracks", size)
     assert seen.view is not None and seen.view.name == "side"
 
     found = AnalysisConfig(fixation_px=None)  # the lens and the axis from the tracks
@@ -487,7 +488,7 @@ def test_direction_takes_ccw_or_cw() -> None:
 
 def test_a_direction_given_is_the_camera_s_sense() -> None:
     from rotrate_cli.stages.camera import camera_at, lens_from
-    from rotrate_cli.video.decode import VideoInfo
+    from rotrate_cli.video.frames import VideoInfo
 
     info = VideoInfo("clip.mp4", 640, 360, 30.0, 90, False, False)
     for direction, sense in (("ccw", 1), ("cw", -1), (None, 0)):

@@ -13,7 +13,7 @@ import pytest
 from rotrate_cli import AnalysisConfig, analyze
 from rotrate_cli.tracking.csrt import CsrtTracker, _parabola_peak, csrt_settings
 from rotrate_cli.tracking.klt import TrackerConfig, track_frames
-from rotrate_cli.video.decode import Frame
+from rotrate_cli.video.frames import Frame
 from tests.conftest import SAMPLES
 
 

@@ -13,7 +13,7 @@ import pytest
 from rotrate_cli import AnalysisConfig, analyze
 from rotrate_cli.scene.patches import place_again
 from rotrate_cli.tracking.keyframes import Keyframes
-from rotrate_cli.video.decode import Frame
+from rotrate_cli.video.frames import Frame
 
 
 def test_keyframes_stay_within_their_budget_and_evenly_spread() -> None:

@@ -12,7 +12,7 @@ import pytest
 from rotrate_cli.fitting.outliers import Combined
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
 from rotrate_cli.stages.verdict import judge, turns_between
-from rotrate_cli.video.decode import Frame
+from rotrate_cli.video.frames import Frame
 
 
 def _turning(times_s: np.ndarray, period_s: float, symmetry: int = 1, size: int = 96, seed: int = 7) -> Thumbnails:

@@ -14,7 +14,7 @@ from rotrate_cli.fitting.outliers import RejectionConfig
 from rotrate_cli.scene.axis import refine_axis_offset
 from rotrate_cli.stages.checks import told_sense_doubt, undecided_sense
 from rotrate_cli.stages.fits import rates_from_offsets
-from rotrate_cli.stages.geometry import _inliers_and_rate
+from rotrate_cli.stages.geometry import inliers_and_rate
 
 
 @pytest.mark.parametrize("omega", [0.1, 0.327, 1.0, 3.14])
@@ -262,7 +262,7 @@ def test_an_undecided_sense_places_the_axis_without_the_lens() -> None:
         off_axis = table.assign(offset_px=table["offset_px"] - 10.0)  # measured from 10 px right of the axis
         result = rates_from_offsets(off_axis, "fit", RejectionConfig(), camera)
         assert result.direction == "unknown"
-        offsets, omega, placing = _inliers_and_rate(result, camera)
+        offsets, omega, placing = inliers_and_rate(result, camera)
         assert placing is None
         assert refine_axis_offset(offsets, omega, placing) == pytest.approx(-10.0, abs=4.0)
 

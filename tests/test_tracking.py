@@ -19,7 +19,7 @@ from rotrate_cli.tracking.klt import (
     tracking_image,
     tracking_scale,
 )
-from rotrate_cli.video.decode import Frame
+from rotrate_cli.video.frames import Frame
 from rotrate_cli.video.synth import Renderer, SceneConfig
 
 

@@ -95,12 +95,13 @@ def test_through_a_lens_found_the_view_takes_the_lens_fits_elevation(monkeypatch
     import rotrate_cli.stages.geometry as geometry_stage
     from rotrate_cli.scene.focal import FocalEstimate
     from rotrate_cli.scene.view import View
+    from rotrate_cli.stages import view_at_rate
     from rotrate_cli.stages.camera import Lens
 
     paths = View(50.0, (232.0, 134.0), 3.0, 211, 137.0, 0.0)
-    monkeypatch.setattr(geometry_stage, "view_from_paths", lambda tracks, omega: paths)
+    monkeypatch.setattr(view_at_rate, "view_from_paths", lambda tracks, omega: paths)
     estimate = FocalEstimate(518.0, 63.4, 1 / 518.0, 1e-4, -59.0, 153, 0.3)
     found = geometry_stage.Geometry(0.0, "lens", (228.5, 213.7), True, Lens(518.0, -59.0, "found", estimate), -59.0)
-    assert geometry_stage.settle_view(found, pd.DataFrame(), 0.2, "tracks", (640, 360)).view.elevation_deg == 59.0
+    assert view_at_rate.view_at_rate(found, pd.DataFrame(), 0.2, "tracks", (640, 360)).view.elevation_deg == 59.0
     orthographic = geometry_stage.Geometry(0.0, "paths", (228.5, 213.7), True, Lens(None), 50.0)
-    assert geometry_stage.settle_view(orthographic, pd.DataFrame(), 0.2, "tracks", (640, 360)).view is paths
+    assert view_at_rate.view_at_rate(orthographic, pd.DataFrame(), 0.2, "tracks", (640, 360)).view is paths

@@ -18,7 +18,8 @@ from rotrate_cli.errors import InputError, OutputError
 from rotrate_cli.output.files import replacing
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene.axis import unit_offset
-from rotrate_cli.video.decode import Frame, FrameSource
+from rotrate_cli.video.decode import FrameSource
+from rotrate_cli.video.frames import Frame
 
 #: Colours (BGR).
 AXIS_COLOUR = (0, 215, 255)

@@ -63,7 +63,7 @@ class View:
 
     Attributes:
         elevation_deg: the axis's elevation out of the image plane: 0 side, 90 frontal (through a
-            lens found from the tracks, the lens fit's: see :func:`rotrate_cli.stages.geometry.settle_view`).
+            lens found from the tracks, the lens fit's: see :func:`rotrate_cli.stages.view_at_rate.view_at_rate`).
         centre_px: the turning centre in the image (the median of the paths' centres), (x, y).
         centre_spread_px: the paths' centres' median distance from it: how well it is set.
         tracks: the tracks that spoke.

@@ -15,7 +15,7 @@ from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene import axis as axes
 from rotrate_cli.stages.fits import RateResult
 from rotrate_cli.stages.geometry import Geometry, axis_angle, locate, measure
-from rotrate_cli.video.decode import VideoInfo
+from rotrate_cli.video.frames import VideoInfo
 
 
 @dataclass(frozen=True)

@@ -15,32 +15,10 @@ from rotrate_cli.fitting.camera import Camera, focal_px_from_fov
 from rotrate_cli.fitting.outliers import RejectionConfig
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene import axis as axes
-from rotrate_cli.scene.focal import ORTHOGRAPHIC_WIDTHS, FocalEstimate, estimate_focal
-from rotrate_cli.stages.fits import RateResult, rates_from_offsets
+from rotrate_cli.scene.focal import FocalEstimate, estimate_focal
+from rotrate_cli.stages.fits import rates_from_offsets
 from rotrate_cli.tracking.keyframes import Keyframes
-from rotrate_cli.video.decode import VideoInfo
-
-#: A found lens's 95% interval, in its inverse focal length, is the widest of three: this many of
-#: its standard errors, :data:`LENS_FLOOR` of itself, and :data:`LENS_FLOOR_TAN` in tan(fov/2).
-#: The standard error understates the error: on 111 lenses found in bench-random renders (35-75
-#: degrees, 0-80 degrees of elevation) the error was a median 1.9 and a 95th percentile 6.9 of
-#: it; the worst, 0.18 in tan(fov/2) (a box from 60 degrees above, bench-random 7002, found at
-#: 79 degrees for 65), held only by this. Near a curved outline the tracker pulls points towards
-#: the object's middle height, which reads as a shorter lens.
-LENS_SE_WIDTHS = 7.0
-
-#: ... at least this fraction of the inverse focal length either side. It was 0.5, set on 13
-#: renders through 15-35 degree lenses before the tracker matched each point against its first
-#: patch (then off by a median of 12%, the worst 56%). Chosen on the survey of 200 bench-random
-#: renders (seeds 1-6 to choose, 7-11 to check): the intervals cover the truth as often as with
-#: 0.5 (181 of 183 with a lens, the same two misses), and 47 rather than 103 are wider than
-#: +-5%, 38 of those within 2%.
-LENS_FLOOR = 0.2
-
-#: ... and at least this much in tan(fov/2) either side: a narrow lens's error is a larger part
-#: of it (a sphere through a 20-degree lens found at 26.6 degrees, 0.06; before the patch
-#: matching, at 30.7 degrees, 0.1).
-LENS_FLOOR_TAN = 0.1
+from rotrate_cli.video.frames import VideoInfo
 
 #: Where the tracks cannot tell the lens, the interval holds the rates through any lens from the
 #: orthographic camera to one this wide (a phone's main camera is 65-75 degrees across; the EPFL
@@ -187,55 +165,6 @@ def _changing(tracks: pd.DataFrame, offsets: np.ndarray) -> bool:
     if not all(math.isfinite(rate) and rate > 0 for rate in rates):
         return False
     return abs(rates[1] / rates[0] - 1.0) > STEADY_FRACTION
-
-
-def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, float], angle_deg: float,
-                    config: AnalysisConfig, size_px: tuple[int, int]) -> RateResult:
-    """The result with its interval widened to hold the rates measured through the lenses at the
-    ends of a found lens's 95% interval (its inverse focal length +- the widest of
-    :data:`LENS_SE_WIDTHS` standard errors, :data:`LENS_FLOOR` of it and :data:`LENS_FLOOR_TAN` in
-    tan(fov/2); 0 is orthographic), or where the lens was sought and could
-    not be told, through the orthographic camera and a :data:`WIDEST_FOV_DEG` lens. As it is for
-    any other lens."""
-    focal = lens.estimate
-    if result.combined.tracks_used == 0:
-        return result
-    if lens.unsettled and lens.focal_px is None:
-        # the tracks could not tell the lens: any from the paper's orthographic camera to a wide one
-        ends: tuple[float, ...] = (0.0, 1.0 / focal_px_from_fov(WIDEST_FOV_DEG, size_px[0]))
-    elif lens.source != "found" or focal is None or lens.focal_px is None:
-        return result
-    else:
-        half = max(LENS_SE_WIDTHS * focal.inverse_focal_se, LENS_FLOOR * focal.inverse_focal,
-                   LENS_FLOOR_TAN * 2.0 / size_px[0])
-        lower = focal.inverse_focal - half
-        if lower < 1.0 / (ORTHOGRAPHIC_WIDTHS * size_px[0]):
-            lower = 0.0  # within its uncertainty of a lens called orthographic: the paper's model is as likely
-        ends = (lower, focal.inverse_focal + half)
-    rates_at_ends = []
-    for inverse in ends:
-        end = replace(lens, focal_px=1.0 / inverse if inverse > 0 else None)
-        camera = camera_at(end, size_px, fixation_px, angle_deg)
-        rates_at_ends.append(rates_from_offsets(result.offsets, config.method, config.rejection, camera)
-                             .combined.omega_rad_s)
-    combined = result.combined
-    # where the paper's orthographic camera is one end, it is as likely as the lens found, and its
-    # rate carries the tracks' own scatter too (an orthographic noisy sphere, 0.38 of a turn: a
-    # lens found at 8.9 degrees read -3.5%, the paper's model -0.7% within +-0.9%; the interval
-    # held the latter's rate only, and missed the truth by 0.7%); so do both ends of an unknown
-    # lens's range (the box of WIDEST_FOV_DEG: orthographic +13.2% within [+2.1%, +24.2%], its
-    # true 60-degree lens given -0.25%; now within [-8.5%, +24.2%]). The ends of a found lens's
-    # range are the far edges of a generous interval (:data:`LENS_FLOOR`): their rates alone.
-    below = combined.omega_rad_s - combined.omega_low_rad_s
-    above = combined.omega_high_rad_s - combined.omega_rad_s
-    spread = [(below, above) if inverse == 0.0 or lens.unsettled else (0.0, 0.0) for inverse in ends]
-    low = float(np.nanmin([combined.omega_low_rad_s,
-                           *(rate - down for rate, (down, _) in zip(rates_at_ends, spread, strict=True))]))
-    if combined.omega_rad_s > 0 and combined.omega_low_rad_s >= 0:
-        low = max(low, 0.0)  # a scatter carried to an end does not make the rate negative
-    high = float(np.nanmax([combined.omega_high_rad_s,
-                            *(rate + up for rate, (_, up) in zip(rates_at_ends, spread, strict=True))]))
-    return replace(result, combined=replace(combined, omega_low_rad_s=low, omega_high_rad_s=high))
 
 
 def method_name(method: str, camera: Camera | None) -> str:

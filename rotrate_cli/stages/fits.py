@@ -302,11 +302,3 @@ def changes(whole: Combined, early: Combined, late: Combined, *_: float) -> bool
     return separate and abs(late.omega_rad_s - early.omega_rad_s) > CHANGE_FRACTION * whole.omega_rad_s
 
 
-def rate_change(result: RateResult, config: AnalysisConfig, camera: Camera | None) -> str | None:
-    """A line saying the rate changes over the clip (see :func:`changes`); None otherwise."""
-    halves = half_rates(result, config, camera)
-    if halves is None or not changes(result.combined, *halves):
-        return None
-    early, late = halves[0], halves[1]
-    return (f"the rate changes over the clip: {early.omega_rad_s:.4g} rad/s in its first half, {late.omega_rad_s:.4g} "
-            "in its second; the result is an average: see omega(t) with `window_s`")

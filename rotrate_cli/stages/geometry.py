@@ -1,16 +1,16 @@
 """The geometry stage: camera, axis and view of one body, as one typed result (:class:`Geometry`).
 
-In three steps, so that the caller can let a long clip's tracks table go between them:
+In two steps, so that the caller can let a long clip's tracks table go between them:
 
 1. :func:`locate`: the axis's angle (given, from the tracks' motion or from their paths' shape),
    the camera (:mod:`rotrate_cli.stages.camera`: given, EXIF, found or orthographic) and a first
    fixation point (given, or found from the tracks' recurrence); the body's offsets from it.
 2. :func:`measure`: the body's rates (:mod:`rotrate_cli.stages.fits`) with a found fixation refined
    to the shared axis the inlier tracks turn about (with the turn speeding up where the rate
-   changes), and a given one checked against it (:func:`fixation_doubt`).
-3. :func:`settle_view`: the view read from the tracks' paths at the reported rate
-   (:mod:`rotrate_cli.scene.view`); where that rate is the clip's repetition and the axis was to be
-   found, the paths' turning centre is the fixation.
+   changes). A given fixation is checked against it by the checks stage
+   (:func:`rotrate_cli.stages.checks.fixation_doubt`).
+
+The view at the reported rate is read after the verdict (:mod:`rotrate_cli.stages.view_at_rate`).
 """
 
 from __future__ import annotations
@@ -28,20 +28,12 @@ from rotrate_cli.fitting.outliers import Combined
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.scene import axis as axes
-from rotrate_cli.scene.view import View, view_from_paths
+from rotrate_cli.scene.view import View
 from rotrate_cli.stages.camera import Lens, camera_at, find_lens, lens_from
-from rotrate_cli.stages.fits import JOINT_MIN_TRACKS, SENSES, RateResult, changes, half_rates, rates_from_offsets, thin
+from rotrate_cli.stages.fits import SENSES, RateResult, changes, half_rates, rates_from_offsets, thin
 from rotrate_cli.stages.tracks import MIN_TRACKS_FOR_ANGLE
 from rotrate_cli.tracking.keyframes import Keyframes
-from rotrate_cli.video.decode import VideoInfo
-
-#: A found axis about which the tracks' interval is this many times narrower than about a given
-#: fixation shows the given one to be off by more than the measurement resolves.
-SHARPER = 1.5
-
-#: A given fixation is checked against the shared axis found, and the rate measured about it, in
-#: turn, this many times at most (until the axis moves by under 2 px).
-FOLLOW_STEPS = 12
+from rotrate_cli.video.frames import VideoInfo
 
 #: An axis moved for a spin-up is kept only where at least this fraction of the inlier tracks
 #: still agree about it. Halves of a short clip can differ by their own bias: a steady cylinder
@@ -119,7 +111,8 @@ class Geometry:
             found lens); NaN where they were not asked.
         view: the view read from the tracks' paths at the reported rate (the axis's elevation
             out of the image plane, 0 side to 90 frontal; the turning centre); None until
-            :func:`settle_view`, and where too few tracks follow a turning path to tell.
+            :func:`rotrate_cli.stages.view_at_rate.view_at_rate`, and where too few tracks follow a
+            turning path to tell.
         notes: what the user should know about how these were found.
         axis_spread: how well a found fixation is placed across the axis and what that does to
             the tracks' rate (:func:`measure`); None where it was given, or the rate is the clip's
@@ -324,7 +317,7 @@ def _axis_spread(
     least squares, its jackknife standard error over tracks) and the rate's change per pixel
     across it, measured about the point moved by that much; None where either cannot be had
     (see :func:`rotrate_cli.stages.checks.with_axis_doubt`)."""
-    offsets, omega, placing = _inliers_and_rate(result, camera)
+    offsets, omega, placing = inliers_and_rate(result, camera)
     se_px = axes.axis_offset_se(offsets, omega, placing)
     if not (math.isfinite(se_px) and math.isfinite(result.combined.omega_rad_s)):
         return None
@@ -341,96 +334,6 @@ def _axis_spread(
     px_per_rate = (higher - lower) / (2.0 * COUPLING_STEP * result.combined.omega_rad_s)
     coupling = rate_per_px * px_per_rate
     return AxisSpread(se_px, rate_per_px, coupling if math.isfinite(coupling) else 0.0)
-
-
-def _within_reach(point_px: tuple[float, float], given_px: tuple[float, float], size_px: tuple[int, int]) -> bool:
-    """Whether ``point_px`` lies no further from the frame's centre than the given fixation does,
-    plus the frame's diagonal (an axis outside the picture can still be told: a record player's
-    spindle beside it)."""
-    width, height = size_px
-    centre = (width / 2.0, height / 2.0)
-    reach = math.hypot(width, height) + math.hypot(given_px[0] - centre[0], given_px[1] - centre[1])
-    return math.hypot(point_px[0] - centre[0], point_px[1] - centre[1]) <= reach
-
-
-def fixation_doubt(result: RateResult, geometry: Geometry, config: AnalysisConfig,
-                   size_px: tuple[int, int]) -> tuple[str, Combined] | None:
-    """A given fixation checked against the axis the inlier tracks turn about (the shared-axis
-    least squares at the measured rate, :func:`rotrate_cli.scene.axis.refine_axis_offset`): a line
-    naming the found axis point when measuring about it moves the rate outside the interval
-    measured about the given one, or narrows the interval :data:`SHARPER` times (what the
-    measurement can resolve), with the rate measured about the found point; None otherwise."""
-    features = result.features
-    inlier = features["inlier"].to_numpy(dtype=bool)
-    if geometry.fixation_found or config.method != "fit" or config.points_px or inlier.sum() < JOINT_MIN_TRACKS:
-        return None
-    offsets, omega, placing = _inliers_and_rate(result, geometry.camera(size_px))
-    ux, uy = axes.unit_offset(geometry.axis_angle_deg)
-    fixation = geometry.fixation_px
-    sense = math.copysign(1.0, omega)
-    shift, again, camera = 0.0, None, geometry.camera(size_px)
-    # the shared axis at the rate measured about it, in turn: the rate measured about a point far
-    # off the axis is far off too, and the axis found at it lies only part of the way (a sample box
-    # given a fixation 1,680 px to the side: 600 px towards its axis, and no warning; now 7 px
-    # from it. Choosing the inliers anew about each point went less far: 98 px)
-    for _ in range(FOLLOW_STEPS):
-        step = axes.refine_axis_offset(offsets.assign(offset_px=offsets["offset_px"].to_numpy() - shift), omega,
-                                       camera if placing is not None else None)
-        if not math.isfinite(step) or (again is not None and abs(step) < 2.0):
-            break
-        shift += step
-        found = (fixation[0] + shift * ux, fixation[1] + shift * uy)
-        if not _within_reach(found, fixation, size_px):
-            # the tracks show no axis near the picture (a record's first 1.5 s, its tracks on the
-            # still reflections: the walk named a point 544,179 px away)
-            return None
-        camera = camera_at(geometry.lens, size_px, found, geometry.axis_angle_deg)
-        moved = offsets.assign(offset_px=offsets["offset_px"].to_numpy() - shift)  # the inliers: memory
-        again = rates_from_offsets(moved, config.method, config.rejection, camera)
-        omega = sense * again.combined.omega_rad_s
-        if abs(step) < 2.0 or not math.isfinite(omega):
-            break
-    if again is None or abs(shift) < 2.0:
-        return None
-    found = (fixation[0] + shift * ux, fixation[1] + shift * uy)
-    rate, combined = again.combined.omega_rad_s, result.combined
-    width = combined.omega_high_rad_s - combined.omega_low_rad_s
-    width_found = again.combined.omega_high_rad_s - again.combined.omega_low_rad_s
-    # resolved: about the found axis the rate moves outside the given one's interval, or the
-    # tracks agree markedly better (a 10 px error on the sample box: interval 0.098 -> 0.006)
-    if not math.isfinite(rate) or (combined.omega_low_rad_s <= rate <= combined.omega_high_rad_s
-                                   and not width > SHARPER * width_found):
-        return None
-    return (f"the tracks turn about an axis through ({found[0]:.1f}, {found[1]:.1f}), {abs(shift):.0f} px from the "
-            f"given fixation; measured about it the rate is {rate:.4g} rad/s, which the 95% interval holds: check "
-            "`fixation_px`, or use `fixation_px=None`", again.combined)
-
-
-def settle_view(geometry: Geometry, view_tracks: pd.DataFrame, omega_rad_s: float, rate_from: str,
-                size_px: tuple[int, int]) -> Geometry:
-    """Step 3: the geometry with the view read from the tracks' paths at the reported rate. Where
-    that rate is the clip's repetition and the fixation was to be found, the found fixation is
-    the paths' turning centre: the tracks' own axis search assumes a side view (on the record
-    clip it put the spindle 380 px off; the paths' centre is 25 px off, and 37 px off where the
-    picture is cropped to leave the spindle outside it)."""
-    view = view_from_paths(view_tracks, omega_rad_s)
-    if view is None:
-        return geometry
-    estimate = geometry.lens.estimate
-    if estimate is not None and math.isfinite(estimate.focal_px) and math.isfinite(geometry.elevation_deg):
-        # the paths read their ellipses as seen from far away; through the lens found, its fit's
-        # elevation is the view's (from 60 degrees above through a 65-degree lens: paths 50, lens 59)
-        view = replace(view, elevation_deg=abs(geometry.elevation_deg))
-    changes_: dict[str, object] = {"view": view}
-    if math.isnan(geometry.elevation_deg):
-        changes_["elevation_deg"] = view.elevation_deg
-    if geometry.fixation_found and rate_from == "repetition":
-        changes_["fixation_px"] = view.centre_px
-        x, y = view.centre_px
-        if not (0 <= x <= size_px[0] - 1 and 0 <= y <= size_px[1] - 1):
-            changes_["notes"] = (*geometry.notes, f"the axis found, ({x:.0f}, {y:.0f}), lies outside the "
-                                 f"{size_px[0]}x{size_px[1]} frame")
-    return replace(geometry, **changes_)  # type: ignore[arg-type]
 
 
 def path_shape(tracks: pd.DataFrame, angle: float) -> axes.PathShape | None:
@@ -475,7 +378,7 @@ def _refine_fixation(
     along = 0.0  # how far the point has moved along the offset direction
     last: tuple[float, float] | None = None  # the last point's place along it and the move found there
     for _ in range(steps):
-        offsets, omega, placing = _inliers_and_rate(result, camera)
+        offsets, omega, placing = inliers_and_rate(result, camera)
         if spin_up is not None:  # the rate at the halves' middles, changing steadily between them
             early, late, early_s, late_s = spin_up
             sense = omega / result.combined.omega_rad_s if result.combined.omega_rad_s else 1.0
@@ -499,7 +402,7 @@ def _refine_fixation(
     return fixation, result, camera
 
 
-def _inliers_and_rate(result: RateResult, camera: Camera | None
+def inliers_and_rate(result: RateResult, camera: Camera | None
                       ) -> tuple[pd.DataFrame, float, Camera | None]:
     """The inlier tracks' offsets, the combined rate, and the camera to place the axis with.
 

@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from rotrate_cli.video.decode import Frame
+from rotrate_cli.video.frames import Frame
 from rotrate_cli.video.light import SteadyLight
 
 #: The thumbnails' longer side, pixels: the whole picture's repetition needs little detail, and

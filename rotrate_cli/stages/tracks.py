@@ -36,7 +36,8 @@ from rotrate_cli.tracking.klt import (
     tracking_scale,
 )
 from rotrate_cli.tracking.steady import CameraPath, Shake, find_shake
-from rotrate_cli.video.decode import FrameSource, VideoInfo, prefetch
+from rotrate_cli.video.decode import FrameSource, prefetch
+from rotrate_cli.video.frames import VideoInfo
 from rotrate_cli.video.shots import longest_shot
 
 #: Progress callback: (frames done, frames expected or None).

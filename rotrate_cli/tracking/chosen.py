@@ -21,7 +21,7 @@ import numpy as np
 from rotrate_cli.errors import InputError
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.tracking.klt import TrackerConfig, TrackingRun, tracking_scale
-from rotrate_cli.video.decode import Frame
+from rotrate_cli.video.frames import Frame
 
 TRACKERS = ("klt", "csrt")
 #: Side of the box CSRT follows around a point, in tracking-image pixels.

@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from rotrate_cli.tracking.steady import CameraPath
-from rotrate_cli.video.decode import Frame
+from rotrate_cli.video.frames import Frame
 
 #: At most this many bytes of images are kept: 109 frames of 640x360, 81 of 640x480.
 MAX_BYTES = 24 << 20

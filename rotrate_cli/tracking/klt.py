@@ -25,7 +25,7 @@ import numpy as np
 
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.tracking.steady import CameraPath
-from rotrate_cli.video.decode import Frame
+from rotrate_cli.video.frames import Frame
 from rotrate_cli.video.light import SteadyLight
 
 KNOWN_LEVELS = 0

@@ -11,11 +11,8 @@ from __future__ import annotations
 
 import math
 import queue
-import re
 import threading
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -24,52 +21,13 @@ import numpy as np
 
 from rotrate_cli.errors import InputError
 from rotrate_cli.video.container import mp4_damage, mp4_duration_s
+from rotrate_cli.video.frames import Frame, VideoInfo, mean_rate
+from rotrate_cli.video.luma import LUMA_CODECS, luma_table, quiet_opencv
+from rotrate_cli.video.sequence import image_files, sequence_frames, sequence_info
 
-IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm"})
 #: Frame rates outside this range are treated as missing or absurd.
 MIN_FPS = 1e-3
 MAX_FPS = 10_000.0
-
-
-@dataclass(frozen=True)
-class VideoInfo:
-    """What is known about a source before decoding it.
-
-    Attributes:
-        source: the path or pattern as the user gave it.
-        width_px, height_px: frame size in pixels.
-        fps: frame rate in frames per second (the container's, or the user's override).
-        frame_count: the container's frame count, or the number of images; None when unknown.
-        is_image_sequence: True for image patterns and folders.
-        fps_overridden: True when the user gave the rate, so times are ``index / fps``.
-        clock: where frame times come from: ``container``, ``fps``, ``exif`` or ``times file``
-            (see :class:`rotrate_cli.video.clock.Clock`).
-        clock_resolution_s: how finely those times are known, seconds.
-        focal_px: the lens's focal length in pixels from the photographs' EXIF, or None.
-    """
-
-    source: str
-    width_px: int
-    height_px: int
-    fps: float
-    frame_count: int | None
-    is_image_sequence: bool
-    fps_overridden: bool
-    clock: str = "container"
-    clock_resolution_s: float = 0.0
-    focal_px: float | None = None
-
-
-@dataclass(frozen=True)
-class Frame:
-    """One decoded frame: its 0-based index in the source, its time in seconds, and its pixels.
-
-    ``image`` is whatever the source's transform returned (BGR uint8 by default).
-    """
-
-    index: int
-    time_s: float
-    image: Any
 
 
 #: The fraction of the announced frames a file other than an MP4/MOV may lack without a warning.
@@ -78,66 +36,6 @@ ANNOUNCED_SLACK = 0.1
 MAX_FAILED_RUN = 48
 #: Frames probed at the start of a video whose first frame decodes black (see :mod:`rotrate_cli.video.pipe`).
 BLACK_PROBE = 12
-#: Codecs whose luma plane OpenCV hands over faster than its BGR conversion (FOURCC, upper case).
-#: For others it is slower, though it skips the conversion: 720p, 240 frames, luma against BGR
-#: and grey conversion, seconds: MPEG-4 part 2 (FMP4) 0.15 / 0.26, MJPEG 0.54 / 0.57; H.264
-#: 0.68 / 0.37, HEVC 0.73 / 0.61, VP9 0.70 / 0.64, and on the real record clip (H.264, 722
-#: frames) 2.30 / 1.76. Their grey is converted from BGR.
-LUMA_CODECS = frozenset({"FMP4", "MP4V", "XVID", "DIVX", "DX50", "MJPG"})
-#: Checks of the decoder's own luma against its colour conversion (see :meth:`FrameSource.frames`):
-#: the gain must be near that of studio-range luma (255/219), and the fit within this many levels.
-_LUMA_GAIN_RANGE = (0.9, 1.3)
-_LUMA_MAX_RMS = 2.0
-
-
-@contextmanager
-def _quiet_opencv() -> Iterator[None]:
-    """Silence OpenCV's log for a while: the FFmpeg backend warns on stderr every time it is
-    asked for undecoded (luma) frames, which we check ourselves."""
-    logging = getattr(getattr(cv2, "utils", None), "logging", None)  # not in every OpenCV build (4.9-4.12)
-    if logging is None:
-        yield
-        return
-    level = logging.getLogLevel()
-    logging.setLogLevel(min(level, logging.LOG_LEVEL_ERROR))
-    try:
-        yield
-    finally:
-        logging.setLogLevel(level)
-
-
-def _natural_key(name: str) -> list[Any]:
-    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", name)]
-
-
-def _pattern_files(pattern: str) -> list[Path]:
-    """Expand a printf pattern such as ``dir/img.%03d.png`` to the existing files, in order.
-
-    Numbering starts at the first existing index among 0..9999 and stops at the first gap,
-    as OpenCV's image-sequence reader does.
-    """
-    try:
-        pattern % 0
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"bad image pattern {pattern!r}: use one printf field such as %03d") from exc
-    first = next((i for i in range(10_000) if Path(pattern % i).is_file()), None)
-    if first is None:
-        raise InputError(f"no image matches the pattern {pattern!r}; check the folder and the %d field")
-    files = []
-    index = first
-    while Path(pattern % index).is_file():
-        files.append(Path(pattern % index))
-        index += 1
-    return files
-
-
-def _folder_files(folder: Path) -> list[Path]:
-    files = [p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES]
-    if not files:
-        raise InputError(f"the folder {folder} holds no images ({', '.join(sorted(IMAGE_SUFFIXES))})")
-    return sorted(files, key=lambda p: _natural_key(p.name))
-
-
 def _check_fps(fps: float | None, what: str) -> None:
     if fps is not None and not (MIN_FPS <= fps <= MAX_FPS and math.isfinite(fps)):
         raise InputError(
@@ -174,10 +72,8 @@ class FrameSource:
         self._first_grey: np.ndarray | None = None  # a thumbnail of a video's first frame, to check its luma
         self._luma: tuple[np.ndarray | None] | None = None  # the checked luma table, once checked
         path = Path(self._source)
-        if "%" in path.name:
-            self._files = _pattern_files(self._source)
-        elif path.is_dir():
-            self._files = _folder_files(path)
+        if "%" in path.name or path.is_dir():
+            self._files = image_files(self._source)
         elif not path.exists():
             raise InputError(f"no such file: {self._source}")
         elif not path.is_file():
@@ -186,11 +82,8 @@ class FrameSource:
             raise InputError(f"the file is empty: {self._source}")
 
         if self._files is not None:
-            first = cv2.imread(str(self._files[0]), cv2.IMREAD_COLOR)
-            if first is None:
-                raise InputError(f"could not read the image {self._files[0]}; is it a picture file?")
-            height, width = first.shape[:2]
-            self.info = self._sequence_info(width, height, fps)
+            self.info, self._times, notes = sequence_info(self._source, self._files, fps, self._times)
+            self.warnings.extend(notes)
             return
 
         capture = self._open_capture()
@@ -221,7 +114,7 @@ class FrameSource:
             raise InputError(f"`times_s` gives {len(self._times)} times but {self._source} announces {count} frames; "
                              "give one time per frame")
         if self._times is not None:
-            rate = _mean_rate(self._times)
+            rate = mean_rate(self._times)
         else:
             rate = float(fps if fps is not None else container_fps)
         self.info = VideoInfo(
@@ -305,7 +198,7 @@ class FrameSource:
         if self._pipe is not None or self._first_grey is None or self._first_grey.max() == 0:
             return False
         if quiet:
-            with _quiet_opencv():
+            with quiet_opencv():
                 ok, image = capture.retrieve()
         else:
             ok, image = capture.retrieve()
@@ -344,34 +237,6 @@ class FrameSource:
             if end_s is not None and time_s > end_s + 1e-9:
                 return
             yield Frame(index, time_s, convert(image))
-
-    def _sequence_info(self, width: int, height: int, fps: float | None) -> VideoInfo:
-        """An image sequence's info and clock: ``--times``, else its EXIF capture times, else
-        ``--fps``; with ``--fps`` given, EXIF times that disagree by more than 1% are warned of."""
-        from rotrate_cli.video.clock import exif_focal_px, exif_times  # Pillow only for photographs
-
-        files = self._files or []
-        focal_px = exif_focal_px(files[0], width)
-        if self._times is not None:
-            if len(self._times) != len(files):
-                raise InputError(f"`times_s` gives {len(self._times)} times for {len(files)} images; "
-                                 "give one time per image")
-            return VideoInfo(self._source, width, height, _mean_rate(self._times), len(files), True, True,
-                             "times file", 0.0, focal_px)
-        exif = exif_times(files)
-        if fps is None:
-            if exif is None or exif.times_s is None:
-                raise InputError("an image sequence has no frame rate and its images carry no capture times; "
-                                 "pass `fps` (frames per second) or `times_s` (one time per image)")
-            self._times = exif.times_s
-            return VideoInfo(self._source, width, height, _mean_rate(exif.times_s), len(files), True, False,
-                             "exif", exif.resolution_s, focal_px)
-        if exif is not None and exif.times_s is not None:
-            exif_rate = _mean_rate(exif.times_s)
-            if abs(exif_rate / fps - 1.0) > 0.01:
-                self.warnings.append(f"`fps={fps:g}` differs from the images' EXIF capture times ({exif_rate:.4g} "
-                                     "frames/s on average); the times used are index / `fps`")
-        return VideoInfo(self._source, width, height, float(fps), len(files), True, True, "fps", 0.0, focal_px)
 
     def _open_capture(self) -> cv2.VideoCapture:
         capture = cv2.VideoCapture(self._source, cv2.CAP_FFMPEG)
@@ -414,19 +279,7 @@ class FrameSource:
                 return
             convert = _compose(_grey, convert)
         if self._files is not None:
-            for index, file in enumerate(self._files):
-                time_s = float(self._times[index]) if self._times is not None else index / self.info.fps
-                if time_s < start_s - 1e-9:
-                    continue
-                if end_s is not None and time_s > end_s + 1e-9:
-                    return
-                image = cv2.imread(str(file), cv2.IMREAD_COLOR)
-                if image is None:
-                    raise InputError(f"could not read the image {file}")
-                if image.shape[:2] != (self.info.height_px, self.info.width_px):
-                    raise InputError(f"the image {file} is {image.shape[1]}x{image.shape[0]}, not the sequence's "
-                                     f"{self.info.width_px}x{self.info.height_px}")
-                yield Frame(index, time_s, convert(image))
+            yield from sequence_frames(self._files, self.info, self._times, start_s, end_s, convert)
             return
 
         if self._pipe is not None:
@@ -469,7 +322,7 @@ class FrameSource:
                 if end_s is not None and time_s > end_s + 1e-9:
                     return
                 if quiet:
-                    with _quiet_opencv():
+                    with quiet_opencv():
                         ok, image = capture.retrieve()
                 else:
                     ok, image = capture.retrieve()
@@ -516,7 +369,7 @@ class FrameSource:
             self.warnings.append(note)
 
     def _open_luma_capture(self) -> cv2.VideoCapture:
-        with _quiet_opencv():
+        with quiet_opencv():
             return cv2.VideoCapture(self._source, cv2.CAP_FFMPEG, [cv2.CAP_PROP_CONVERT_RGB, 0])
 
     def luma_levels(self) -> np.ndarray | None:
@@ -535,7 +388,7 @@ class FrameSource:
         if self._luma is None:
             capture = self._open_luma_capture()
             try:
-                with _quiet_opencv():
+                with quiet_opencv():
                     ok, luma = capture.read() if capture.isOpened() else (False, None)
             finally:
                 capture.release()
@@ -545,17 +398,8 @@ class FrameSource:
     def _check_luma(self, luma: np.ndarray | None) -> None:
         """Fit and cache the luma table from the decoder's luma of the first frame (see
         :meth:`luma_levels`); None cached when it does not check out."""
-        table = None
         size = (self.info.height_px, self.info.width_px)
-        if luma is not None and self._first_grey is not None and luma.dtype == np.uint8 and luma.shape == size:
-            x = luma[::4, ::4].astype(float).ravel()
-            y = self._first_grey.astype(float).ravel()
-            if x.std() > 4.0:
-                gain, bias = np.polyfit(x, y, 1)
-                rms = float(np.sqrt(np.mean((gain * x + bias - y) ** 2)))
-                if _LUMA_GAIN_RANGE[0] <= gain <= _LUMA_GAIN_RANGE[1] and rms <= _LUMA_MAX_RMS:
-                    table = np.clip(np.rint(gain * np.arange(256) + bias), 0, 255).astype(np.uint8)
-        self._luma = (table,)
+        self._luma = (luma_table(luma, self._first_grey, size),)
 
     def _luma_stream(
         self, start_s: float, end_s: float | None, convert: Callable[[np.ndarray], Any], map_luma: bool
@@ -600,11 +444,6 @@ class FrameSource:
         if not math.isfinite(stamp_ms) or stamp_ms < 0 or (index > 0 and stamp_ms / 1000.0 <= last_time_s):
             return fallback
         return stamp_ms / 1000.0
-
-
-def _mean_rate(times_s: np.ndarray) -> float:
-    """Frames per second on average over ``times_s``."""
-    return (len(times_s) - 1) / float(times_s[-1] - times_s[0])
 
 
 def _compose(
