@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -41,3 +42,36 @@ def need(path: Path, what: str) -> None:
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(12345)
+
+
+@dataclass(frozen=True)
+class Sample:
+    """A bundled sample clip and its truth (the JSON ``rotrate synth`` wrote beside it)."""
+
+    path: Path
+    truth: dict
+
+    @property
+    def omega_rad_s(self) -> float:
+        return abs(float(self.truth["omega_rad_s"]))
+
+    @property
+    def fixation_px(self) -> tuple[float, float]:
+        x, y = self.truth["fixation_px"]
+        return float(x), float(y)
+
+
+def _sample_fixture(name: str):  # noqa: ANN202 - a pytest fixture
+    def sample() -> Sample:
+        path = SAMPLES / f"{name}.mp4"
+        return Sample(path, truth_of(path))
+
+    sample.__doc__ = f"sample_videos/{name}.mp4 and its truth."
+    return pytest.fixture(name=name)(sample)
+
+
+#: One fixture per bundled sample clip, named as the clip (``def test_x(box_ortho): ...``).
+SAMPLE_NAMES = ("box_ortho", "box_perspective", "box_roll10", "box_spinup", "cylinder_horizontal",
+                "cylinder_ortho", "sphere_ortho", "two_bodies")
+for _name in SAMPLE_NAMES:
+    globals()[_name] = _sample_fixture(_name)

@@ -277,30 +277,3 @@ def test_a_tall_window_is_laid_along_the_rows_and_a_wide_one_is_not() -> None:
     turned = KltTracker((640, 360), TrackerConfig(win_width_px=21, win_height_px=5, laid_along_rows=True))
     assert turned._lk["winSize"] == (21, 5) and not turned._transposed
     assert not KltTracker((640, 360), TrackerConfig(laid_along_rows=False))._transposed
-
-
-def test_videos_are_followed_with_the_window_laid_along_the_rows_and_stills_as_given(monkeypatch, tmp_path) -> None:
-    """By source, as the tracker's other choices (see TrackerConfig.laid_along_rows)."""
-    from pathlib import Path
-
-    from rotrate_cli.config import AnalysisConfig
-    from rotrate_cli.stages import tracks
-
-    chosen = []
-    follow = tracks.track_frames
-
-    def noted(stream, size_px, config, *args, **kwargs):
-        chosen.append(config.laid_along_rows)
-        return follow(stream, size_px, config, *args, **kwargs)
-
-    monkeypatch.setattr(tracks, "track_frames", noted)
-    clip = Path(__file__).resolve().parents[1] / "sample_videos" / "box_ortho.mp4"
-    tracks.read_footage(clip, AnalysisConfig(fixation_px=(319.5, 179.5), end_s=1.0))
-    capture = cv2.VideoCapture(str(clip))
-    for index in range(12):
-        ok, image = capture.read()
-        assert ok
-        cv2.imwrite(str(tmp_path / f"still{index:02d}.png"), image)
-    capture.release()
-    tracks.read_footage(tmp_path, AnalysisConfig(fixation_px=(319.5, 179.5), fps=30.0))
-    assert chosen[0] is True and chosen[-1] is False

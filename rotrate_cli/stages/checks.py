@@ -15,7 +15,7 @@ import numpy as np
 from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.fitting import estimators
 from rotrate_cli.fitting.camera import Camera, focal_px_from_fov
-from rotrate_cli.fitting.outliers import Combined, combine
+from rotrate_cli.fitting.outliers import Combined, RejectionConfig, combine
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene import axis as axes
 from rotrate_cli.scene.focal import ORTHOGRAPHIC_WIDTHS
@@ -54,7 +54,8 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
     # (not the lens's range, the far ends of a generous interval, nor the clock's, which scales
     # the rate and leaves the paths, and so the axis, as they are); None where the rate repeats
     result, axis_note = with_axis_doubt(result, geometry.axis_spread)
-    result = with_lens_doubt(result, geometry.lens, geometry.fixation_px, geometry.axis_angle_deg, config, size_px)
+    result = with_lens_doubt(result, geometry.lens, geometry.fixation_px, geometry.axis_angle_deg, config.method,
+                             config.rejection, size_px)
     result = with_clock_doubt(result, clock_resolution_s)
     if repeating or result.combined.tracks_used == 0:
         return Checked(result)
@@ -72,7 +73,7 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
     doubts += (unplaced,) if unplaced else ()
     lens_notes += (axis_note,) if axis_note else ()
     camera = geometry.camera(size_px)
-    doubt = fixation_doubt(result, geometry, config, size_px)
+    doubt = fixation_doubt(result, geometry, config.method, config.rejection, bool(config.points_px), size_px)
     if doubt is not None:
         # which is off, the given point or the tracks' axis, is not known: the interval holds both
         # rates (a sample box given a point 1,680 px to the side: 0.134 within [0.088, 0.179],
@@ -83,7 +84,7 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
     told = told_sense_doubt(result, camera, geometry.lens.told_sense)
     if told is not None:
         doubts += (told,)
-    change = rate_change(result, config, camera)
+    change = rate_change(result, config.method, config.rejection, camera)
     if change is not None:
         doubts += (change,)
     sides = sides_disagree(result)
@@ -465,8 +466,8 @@ def _within_reach(point_px: tuple[float, float], given_px: tuple[float, float], 
     return math.hypot(point_px[0] - centre[0], point_px[1] - centre[1]) <= reach
 
 
-def fixation_doubt(result: RateResult, geometry: Geometry, config: AnalysisConfig,
-                   size_px: tuple[int, int]) -> tuple[str, Combined] | None:
+def fixation_doubt(result: RateResult, geometry: Geometry, method: str, rejection: RejectionConfig,
+                   chosen_points: bool, size_px: tuple[int, int]) -> tuple[str, Combined] | None:
     """A given fixation checked against the axis the inlier tracks turn about (the shared-axis
     least squares at the measured rate, :func:`rotrate_cli.scene.axis.refine_axis_offset`): a line
     naming the found axis point when measuring about it moves the rate outside the interval
@@ -474,7 +475,7 @@ def fixation_doubt(result: RateResult, geometry: Geometry, config: AnalysisConfi
     measurement can resolve), with the rate measured about the found point; None otherwise."""
     features = result.features
     inlier = features["inlier"].to_numpy(dtype=bool)
-    if geometry.fixation_found or config.method != "fit" or config.points_px or inlier.sum() < JOINT_MIN_TRACKS:
+    if geometry.fixation_found or method != "fit" or chosen_points or inlier.sum() < JOINT_MIN_TRACKS:
         return None
     offsets, omega, placing = inliers_and_rate(result, geometry.camera(size_px))
     ux, uy = axes.unit_offset(geometry.axis_angle_deg)
@@ -498,7 +499,7 @@ def fixation_doubt(result: RateResult, geometry: Geometry, config: AnalysisConfi
             return None
         camera = camera_at(geometry.lens, size_px, found, geometry.axis_angle_deg)
         moved = offsets.assign(offset_px=offsets["offset_px"].to_numpy() - shift)  # the inliers: memory
-        again = rates_from_offsets(moved, config.method, config.rejection, camera)
+        again = rates_from_offsets(moved, method, rejection, camera)
         omega = sense * again.combined.omega_rad_s
         if abs(step) < 2.0 or not math.isfinite(omega):
             break
@@ -519,7 +520,7 @@ def fixation_doubt(result: RateResult, geometry: Geometry, config: AnalysisConfi
 
 
 def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, float], angle_deg: float,
-                    config: AnalysisConfig, size_px: tuple[int, int]) -> RateResult:
+                    method: str, rejection: RejectionConfig, size_px: tuple[int, int]) -> RateResult:
     """The result with its interval widened to hold the rates measured through the lenses at the
     ends of a found lens's 95% interval (its inverse focal length +- the widest of
     :data:`LENS_SE_WIDTHS` standard errors, :data:`LENS_FLOOR` of it and :data:`LENS_FLOOR_TAN` in
@@ -545,7 +546,7 @@ def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, fl
     for inverse in ends:
         end = replace(lens, focal_px=1.0 / inverse if inverse > 0 else None)
         camera = camera_at(end, size_px, fixation_px, angle_deg)
-        rates_at_ends.append(rates_from_offsets(result.offsets, config.method, config.rejection, camera)
+        rates_at_ends.append(rates_from_offsets(result.offsets, method, rejection, camera)
                              .combined.omega_rad_s)
     combined = result.combined
     # where the paper's orthographic camera is one end, it is as likely as the lens found, and its
@@ -567,9 +568,9 @@ def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, fl
     return replace(result, combined=replace(combined, omega_low_rad_s=low, omega_high_rad_s=high))
 
 
-def rate_change(result: RateResult, config: AnalysisConfig, camera: Camera | None) -> str | None:
+def rate_change(result: RateResult, method: str, rejection: RejectionConfig, camera: Camera | None) -> str | None:
     """A line saying the rate changes over the clip (see :func:`changes`); None otherwise."""
-    halves = half_rates(result, config, camera)
+    halves = half_rates(result, method, rejection, camera)
     if halves is None or not changes(result.combined, *halves):
         return None
     early, late = halves[0], halves[1]

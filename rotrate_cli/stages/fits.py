@@ -11,7 +11,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.fitting import estimators
 from rotrate_cli.fitting.camera import Camera
 from rotrate_cli.fitting.joint import joint_fit
@@ -275,11 +274,11 @@ def no_result_message(features: pd.DataFrame) -> str:
             "try a longer clip, `roi` around the object, or check `fixation_px`")
 
 
-def half_rates(result: RateResult, config: AnalysisConfig,
-            camera: Camera | None) -> tuple[Combined, Combined, float, float] | None:
+def half_rates(result: RateResult, method: str, rejection: RejectionConfig,
+               camera: Camera | None) -> tuple[Combined, Combined, float, float] | None:
     """The rates of the clip's first and second halves (same tracks, same rules) and the middle
     time of each; None where a half gives no rate."""
-    if config.method != "fit" or result.combined.tracks_used < JOINT_MIN_TRACKS:
+    if method != "fit" or result.combined.tracks_used < JOINT_MIN_TRACKS:
         return None
     times = result.offsets["time_s"].to_numpy()
     first, last = float(times.min()), float(times.max())
@@ -287,7 +286,7 @@ def half_rates(result: RateResult, config: AnalysisConfig,
     halves = []
     for part in (times <= middle, times > middle):
         try:
-            halves.append(rates_from_offsets(result.offsets[part], config.method, config.rejection, camera).combined)
+            halves.append(rates_from_offsets(result.offsets[part], method, rejection, camera).combined)
         except (ValueError, IndexError):
             return None
     if not all(h.tracks_used > 0 and math.isfinite(h.omega_rad_s) for h in halves):

@@ -278,7 +278,7 @@ def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size
         # px), and each further one costs a fit of all its tracks (45,000 on the record clip)
         fixation, result, camera = _refine_fixation(result, camera, fixation, angle, measured,
                                                     steps=STEADY_REFINE_STEPS if known_steady else REFINE_STEPS)
-        change = None if known_steady else half_rates(result, config, camera)
+        change = None if known_steady else half_rates(result, config.method, config.rejection, camera)
         if change is not None and changes(result.combined, *change):
             # a spinning-up body: one rate for all tracks misplaces the axis; the turn's angle
             # as it speeds up (from the halves' rates) does not. Once: measuring the halves again

@@ -1,5 +1,5 @@
-"""Honest confidence: a changing rate is said (and its axis still found), a given fixation the
-tracks disagree with is named, and steady clips stay quiet."""
+"""The checks stage (rotrate_cli.stages.checks): every doubt about the tracks' rate is named, and
+the intervals it widens; a fixation the tracks disagree with is named, and steady clips stay quiet."""
 
 from __future__ import annotations
 
