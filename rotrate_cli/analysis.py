@@ -27,8 +27,9 @@ from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.runtime.pools import pipeline_threads
 from rotrate_cli.scene.focal import FocalEstimate
 from rotrate_cli.scene.reasons import name_rejections, track_places
-from rotrate_cli.scene.sense import sense_of_turning
-from rotrate_cli.scene.view import View, keep_for_view
+from rotrate_cli.scene.sense import not_side_view, sense_of_turning
+from rotrate_cli.scene.turning import PictureTurning, picture_turning
+from rotrate_cli.scene.view import View, keep_for_view, view_from_paths
 from rotrate_cli.stages.bodies import measure_bodies
 from rotrate_cli.stages.camera import lens_from, method_name
 from rotrate_cli.stages.checks import Checked, check_rate
@@ -247,6 +248,21 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     return _result(footage, config, geometry, checked, period, view_tracks, series=series, tracks=kept)
 
 
+def _picture_turning(footage: Footage, geometry: Geometry, view_tracks: pd.DataFrame | None,
+                     period: Period) -> PictureTurning | None:
+    """The picture's own turning among the rates the return allows (:mod:`rotrate_cli.scene.turning`),
+    about the centre and through the ellipse of the tracks' paths at the return's rate where they
+    tell them (a tilted disc), else about the fixation, face on; None in a side view."""
+    rate = period.omega_rad_s()[0]
+    view = view_from_paths(view_tracks, rate) if view_tracks is not None else None
+    if view_tracks is None or not not_side_view(view, view_tracks):
+        return None  # seen from the side the picture does not turn: a test of its turning says nothing
+    if view is None:
+        return picture_turning(footage.pairs.pairs, geometry.fixation_px, footage.info.width_px, rate)
+    ellipse = (view.across_deg, math.sin(math.radians(view.elevation_deg)))
+    return picture_turning(footage.pairs.pairs, view.centre_px, footage.info.width_px, rate, ellipse)
+
+
 def _angle_guess(footage: Footage, config: AnalysisConfig) -> float:
     """The axis's angle before the geometry stage: for the paper's sample spacing."""
     if config.axis_angle_deg is not None:
@@ -283,7 +299,9 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     tracks_rate = combined if combined.tracks_used > 0 else None
     if period is not None:
         period = turns_between(period, tracks_rate, combined.tracks_used)
-    verdict = judge(tracks_rate, period, combined.tracks_used, checked.doubts)
+    verdict = judge(tracks_rate, period, combined.tracks_used, checked.doubts,
+                    turning=lambda: _picture_turning(footage, geometry, view_tracks, period))
+    footage.pairs.clear()
     size_px = (footage.info.width_px, footage.info.height_px)
     direction, in_picture = result.direction, False
     if view_tracks is not None:

@@ -22,8 +22,8 @@ Times are the frames' own (:attr:`rotrate_cli.video.decode.Frame.time_s`): photo
 irregular moments of a steadily turning table are placed by their capture times.
 
 An object with an m-fold symmetry (a fan's blades, spokes) repeats m times a turn; the period
-found is then a fraction of the turn, and the tracks' own rate tells which fraction
-(:func:`harmonic`).
+found is then a fraction of the turn, which the return alone cannot tell: the tracks' rate or the
+picture's own turning tell which (:func:`rotrate_cli.stages.verdict.tell_repeats`).
 """
 
 from __future__ import annotations
@@ -493,17 +493,3 @@ def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int
     half_s = math.sqrt((1.96 * se_s) ** 2 + floor_s ** 2 + clock_s ** 2 + (0.5 * drift_s) ** 2)
     return Period(period_s, period_s - half_s, period_s + half_s, repeats, count, likeness, fit, drift_s, excess,
                   lag0)
-
-
-def harmonic(period: Period, omega_rad_s: float, omega_low_rad_s: float, omega_high_rad_s: float,
-             most: int = 12) -> int | None:
-    """How many periods make one turn, as the tracks' rate (with its interval) says: the whole
-    number whose rate lies inside the tracks' interval, nearest their rate; None when none does
-    (the two measurements disagree)."""
-    if not (math.isfinite(omega_rad_s) and omega_rad_s > 0):
-        return None
-    candidates = [m for m in range(1, most + 1)
-                  if omega_low_rad_s <= period.omega_rad_s(m)[0] <= omega_high_rad_s]
-    if not candidates:
-        return None
-    return min(candidates, key=lambda m: abs(math.log(period.omega_rad_s(m)[0] / omega_rad_s)))

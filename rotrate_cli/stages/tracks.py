@@ -22,6 +22,7 @@ from rotrate_cli.errors import InputError, NoResultError
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.scene import axis as axes
+from rotrate_cli.scene.turning import FramePairs
 from rotrate_cli.stages.fits import no_result_message
 from rotrate_cli.stages.period import Thumbnails
 from rotrate_cli.tracking.chosen import follow_points
@@ -67,6 +68,8 @@ class Footage:
         tracks: ``frame, time_s, track, x_px, y_px`` sorted by track then frame (tracks from 0).
         thumbnails: a small grey picture of each frame, for the clip's repetition.
         keyframes: some of the tracker's own images, evenly over the clip, for the lens's fit.
+        pairs: some pairs of consecutive frames, evenly over the clip, for the picture's own
+            turning (:mod:`rotrate_cli.scene.turning`).
         frames: frames analysed.
         duration_s: time from the first to the last analysed frame, seconds.
         motion_angle_deg: the axis's angle in the image as the tracks' motion shows it (the
@@ -82,6 +85,7 @@ class Footage:
     tracks: pd.DataFrame
     thumbnails: Thumbnails
     keyframes: Keyframes
+    pairs: FramePairs
     frames: int
     duration_s: float
     motion_angle_deg: float
@@ -107,7 +111,8 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     thumbnails = Thumbnails()
     scale = tracking_scale((info.width_px, info.height_px), tracker)
     keyframes = Keyframes(scale)
-    run = _track(video, config, tracker, progress, thumbnails, keyframes)
+    pairs = FramePairs()
+    run = _track(video, config, tracker, progress, thumbnails, keyframes, pairs)
     if run.frames == 0:
         raise InputError(f"no frame of {source} lies between `start_s` and `end_s`")
     if run.frames < 3:
@@ -115,14 +120,14 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     if run.tracks.empty and thumbnails.lifeless_fraction() >= LIFELESS and video.use_ffmpeg():
         # OpenCV's trouble with interlaced streams: black frames, or one frozen garbled picture;
         # it strikes some openings of a file and not others, so it is caught here too
-        run = _track(video, config, tracker, progress, thumbnails, keyframes)
+        run = _track(video, config, tracker, progress, thumbnails, keyframes, pairs)
     _check_tracked(run, thumbnails, source)
     shot = None if config.points_px else longest_shot(thumbnails.times_s, thumbnails.images, thumbnails.levels)
     if shot is not None:
         # the clip cuts: tracks do not cross a cut, and the repetition is another scene's too
         last = shot.last == len(thumbnails.times_s) - 1  # to the clip's end (thumbnails stop at a long clip's)
         config = replace(config, start_s=shot.start_s, end_s=config.end_s if last else shot.end_s)
-        run = _track(video, config, tracker, progress, thumbnails, keyframes)
+        run = _track(video, config, tracker, progress, thumbnails, keyframes, pairs)
         _check_tracked(run, thumbnails, source)
     tracks = by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
@@ -130,7 +135,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     if shaken is not None:
         # a hand-held camera: track again knowing its motion, so that the still background is let
         # go of as on a tripod and the points go to the body; the positions as a still camera saw them
-        run = _track(video, config, tracker, progress, thumbnails, keyframes, shaken[0])
+        run = _track(video, config, tracker, progress, thumbnails, keyframes, pairs, shaken[0])
         tracks = shaken[0].steady(by_track(run.tracks))
     angle = config.axis_angle_deg if config.axis_angle_deg is not None else math.nan
     if config.axis_angle_deg is None and tracks["track"].nunique() >= MIN_TRACKS_FOR_ANGLE:
@@ -138,7 +143,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         if across(angle):
             # the motion runs up and down the image: track again with the window turned to suit it
             camera = None if shaken is None else shaken[0]
-            run = _track(video, config, turned(tracker), progress, thumbnails, keyframes, camera)
+            run = _track(video, config, turned(tracker), progress, thumbnails, keyframes, pairs, camera)
             if run.tracks.empty:
                 raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
             tracks = by_track(run.tracks) if camera is None else camera.steady(by_track(run.tracks))
@@ -157,8 +162,8 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         short = video.shortfall(run.frames, run.last_time_s)
         if short is not None:
             notes.append(short)
-    return Footage(info, tracks, thumbnails, keyframes, run.frames, run.last_time_s - run.first_time_s, float(angle),
-                   tuple(notes), shake, camera)
+    return Footage(info, tracks, thumbnails, keyframes, pairs, run.frames, run.last_time_s - run.first_time_s,
+                   float(angle), tuple(notes), shake, camera)
 
 
 def _check_against_frames(config: AnalysisConfig, info: VideoInfo) -> list[str]:
@@ -215,7 +220,7 @@ def turned(tracker: TrackerConfig) -> TrackerConfig:
 
 
 def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
-           progress: ProgressCallback | None, thumbnails: Thumbnails, keyframes: Keyframes,
+           progress: ProgressCallback | None, thumbnails: Thumbnails, keyframes: Keyframes, pairs: FramePairs,
            camera: CameraPath | None = None) -> TrackingRun:
     """Decode (in a background thread) and track the frames of ``video`` between start and end,
     keeping a thumbnail of each in ``thumbnails`` and some of the tracker's images in
@@ -237,7 +242,9 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
     size_px = (info.width_px, info.height_px)
     thumbnails.clear()
-    stream = prefetch(thumbnails.tap(frames))  # thumbnails made in the decoding thread: off the tracker's path
+    pairs.clear()
+    # thumbnails and frame pairs made in the decoding thread: off the tracker's path
+    stream = prefetch(pairs.tap(thumbnails.tap(frames)))
     keyframes.clear()
     if config.points_px:
         return follow_points(stream, size_px, list(config.points_px), config.tracker_kind, tracker, notify)

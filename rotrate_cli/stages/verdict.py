@@ -37,10 +37,12 @@ measurements disagree; each reason is given.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 
 from rotrate_cli.fitting.outliers import Combined
-from rotrate_cli.stages.period import Period, harmonic
+from rotrate_cli.scene.turning import PictureTurning
+from rotrate_cli.stages.period import SAME_PICTURE, Period
 
 #: An interval wider than this fraction of the rate on either side is weak evidence.
 WEAK_HALF_WIDTH = 0.05
@@ -50,11 +52,21 @@ WEAK_HALF_WIDTH = 0.05
 INFORMATIVE_HALF_WIDTH = 0.05
 #: A tracks-only result needs this many consistent tracks to be called good.
 MIN_TRACKS = 5
-#: Where the tracks and the repetition disagree, tracks within this factor of a whole number
-#: (above one) of repeats a turn make the result weak: the object may be symmetric.
-NEAR_FACTOR = 1.1
-#: Beyond this many repeats a turn, whole numbers lie so close that being near one says nothing.
-MOST_SYMMETRY = 6
+#: The most repeats a turn a picture is taken to show where nothing tells (a checker of 16
+#: columns, a gear's teeth beyond): the interval of an undecided count reaches down to it.
+MOST_REPEATS = 16
+#: The most repeats a turn that measured rates are matched against (bolts, teeth, spokes).
+MOST_TOLD = 64
+#: Tracks whose interval is wider than this (half, of their rate) do not tell the repeats: on
+#: real footage they slide along grooves and rims and read several times too slow.
+TRACKS_TELL = 0.25
+#: How far beyond their interval the tracks' rate may lie on real footage (through a lens
+#: found, on glossy paint: the EPFL cars' tracks 4-16% off a rate their interval missed).
+TRACKS_ALLOWANCE = 0.15
+#: How far beyond its range of best trial rates the picture's turning may lie.
+TURNING_ALLOWANCE = 0.02
+#: Repeat counts listed in a warning where they are left open.
+LISTED = 6
 
 #: A picture that comes back only once in the clip, with its closest pairs differing by more than
 #: this (in typical differences, :attr:`rotrate_cli.stages.period.Period.excess`) beyond what their
@@ -71,6 +83,109 @@ UNDER_TURN = 1.5
 #: Halves of the clip whose repeats differ by more than this fraction show a changing rate.
 CHANGE_FRACTION = 0.01
 
+
+
+@dataclass(frozen=True)
+class Repeats:
+    """How many times the picture repeats a turn, as the evidence tells it.
+
+    Attributes:
+        repeats: the count taken (the smallest left open where undecided).
+        decided: True when one count alone fits the evidence.
+        candidates: the counts left open (just ``repeats`` where decided).
+        told_by: what decided it (``tracks``, ``the picture's turning``, both), or "".
+        notes, weak: lines for the report; ``weak`` makes the result weak.
+        spanned_by: where the evidence disagrees with every count, the tracks' interval, which
+            the reported interval also holds; None otherwise.
+    """
+
+    repeats: int
+    decided: bool
+    candidates: tuple[int, ...]
+    told_by: str = ""
+    notes: tuple[str, ...] = ()
+    weak: tuple[str, ...] = ()
+    spanned_by: tuple[float, float] | None = field(default=None)
+
+
+def counts_within(period: Period, low_rad_s: float, high_rad_s: float, most: int = MOST_TOLD) -> list[int]:
+    """The counts ``k`` of repeats a turn whose rate (a turn every ``k`` periods) lies in
+    ``[low_rad_s, high_rad_s]``."""
+    return [k for k in range(1, most + 1) if low_rad_s <= period.omega_rad_s(k)[0] <= high_rad_s]
+
+
+def _by_tracks(period: Period, tracks: Combined | None, tracks_used: int) -> list[int] | None:
+    """The counts the tracks allow; None where they say nothing (too few, or too loose)."""
+    if tracks is None or tracks_used < MIN_TRACKS or not 0 < tracks.omega_rad_s < math.inf:
+        return None
+    if _half_width(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s) > TRACKS_TELL:
+        return None
+    within = counts_within(period, tracks.omega_low_rad_s, tracks.omega_high_rad_s)
+    if len(within) == 1:
+        return within
+    if within:  # a high count: its neighbours lie inside the interval too
+        return within
+    return counts_within(period, tracks.omega_low_rad_s / (1 + TRACKS_ALLOWANCE),
+                         tracks.omega_high_rad_s * (1 + TRACKS_ALLOWANCE))
+
+
+def _by_turning(period: Period, turning: PictureTurning | None) -> list[int] | None:
+    """The counts the picture's turning allows; None where it was not measured, or matches no
+    count (an alignment drawn to a still part of the picture)."""
+    if turning is None:
+        return None
+    within = counts_within(period, turning.omega_low_rad_s / (1 + TURNING_ALLOWANCE),
+                           turning.omega_high_rad_s * (1 + TURNING_ALLOWANCE))
+    return within or None
+
+
+def _listed(period: Period, counts: list[int] | tuple[int, ...]) -> str:
+    shown = ", ".join(f"k = {k}: {period.omega_rad_s(k)[0]:.4g}" for k in counts[:LISTED])
+    return shown + (f", ... k = {counts[-1]}: {period.omega_rad_s(counts[-1])[0]:.4g}" if len(counts) > LISTED else "")
+
+
+def tell_repeats(period: Period, tracks: Combined | None, tracks_used: int,
+                 turning: PictureTurning | Callable[[], PictureTurning | None] | None) -> Repeats:
+    """How many repeats of the picture make a turn (see :class:`Repeats`): the counts the tracks'
+    rate and the picture's own turning each allow (the turning measured only where the tracks
+    do not tell one count alone); one count left is decided; none, or several, is weak and
+    listed. A return alone never tells: a fan of five blades comes back after a fifth of a turn."""
+    return_s = f"the picture comes back every {period.period_s:.4g} s"
+    by_tracks = _by_tracks(period, tracks, tracks_used)
+    by_turning = None
+    if by_tracks is None or len(by_tracks) != 1:
+        by_turning = _by_turning(period, turning() if callable(turning) else turning)
+    told = [(name, set(counts)) for name, counts in (("the tracks' rate", by_tracks),
+                                                     ("the picture's turning", by_turning)) if counts is not None]
+    if not told:
+        counts = list(range(1, MOST_REPEATS + 1))
+        return Repeats(1, False, tuple(counts), weak=(
+            f"{return_s}, but nothing tells whether that is a whole turn or a part of one (a body that looks "
+            f"alike n times a turn, such as a fan, spokes or a pattern, comes back n times): the rate is "
+            f"{_listed(period, counts)} rad/s for k repeats a turn; the 95% interval holds them all",))
+    common = set.intersection(*(counts for _, counts in told))
+    names = " and ".join(name for name, _ in told)
+    if len(common) == 1:
+        k = common.pop()
+        notes = (f"the picture repeats {k} times a turn (a symmetric body); {names} tells which",) if k > 1 else ()
+        return Repeats(k, True, (k,), names, notes)
+    if common:
+        counts = sorted(common)
+        return Repeats(counts[0], False, tuple(counts), weak=(
+            f"{return_s}; {names} leaves open how many times a turn: {_listed(period, counts)} rad/s; the 95% "
+            "interval holds them all",))
+    # the evidence fits no whole number of repeats
+    said = "; ".join(f"{name} allows k = {', '.join(map(str, sorted(c)))}" if c else f"{name} fits no whole number"
+                     for name, c in told)
+    spanned = None
+    if tracks is not None and 0 < tracks.omega_rad_s < math.inf:
+        spanned = (tracks.omega_low_rad_s, tracks.omega_high_rad_s)
+        said = (f"the tracks' rate ({tracks.omega_rad_s:.4g} rad/s) is not a whole number of the picture's repeats "
+                f"({period.omega_rad_s()[0]:.4g} rad/s a repeat)" if by_tracks == [] else said)
+    counts = list(range(1, MOST_REPEATS + 1))
+    return Repeats(1, False, tuple(counts), weak=(
+        f"{said}: the measurements disagree; {_listed(period, counts)} rad/s for k repeats a turn, and the 95% "
+        "interval holds them and the tracks' rate",), spanned_by=spanned)
 
 
 @dataclass(frozen=True)
@@ -104,11 +219,14 @@ def _half_width(omega: float, low: float, high: float) -> float:
 
 
 def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
-          doubts: tuple[str, ...] = ()) -> Verdict:
+          doubts: tuple[str, ...] = (),
+          turning: PictureTurning | Callable[[], PictureTurning | None] | None = None) -> Verdict:
     """The reported rate from the tracks' combined rate (None: no track gave one) and the
     clip's repetition (None: none seen); ``tracks_used`` tracks stand behind ``tracks``;
     ``doubts`` about the tracks' rate (a given fixation the tracks disagree with) make a
-    tracks-only result weak and are notes beside the repetition's.
+    tracks-only result weak and are notes beside the repetition's. ``turning``: the picture's
+    own turning (:mod:`rotrate_cli.scene.turning`), or a call that measures it, made only where
+    the tracks do not tell how many repeats make a turn.
 
     Raises:
         ValueError: neither measurement is given.
@@ -119,30 +237,26 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
         return _tracks_only(tracks, tracks_used, doubts)
     notes: list[str] = list(doubts)
     weak: list[str] = []
-    repeats, confirmed = 1, False
-    if (tracks is not None and math.isfinite(tracks.omega_rad_s) and tracks.omega_rad_s > 0
-            and tracks_used >= MIN_TRACKS):
-        spread = _half_width(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s)
-        if spread <= INFORMATIVE_HALF_WIDTH:
-            found = harmonic(period, tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s)
-            if found is None:
-                nearest = max(1, round(period.omega_rad_s()[0] / tracks.omega_rad_s))
-                ratio = period.omega_rad_s(nearest)[0] / tracks.omega_rad_s
-                disagreement = (f"the tracks' rate ({tracks.omega_rad_s:.4g} rad/s) disagrees with the clip's "
-                                f"repetition ({period.omega_rad_s()[0]:.4g} rad/s a repeat)")
-                if 1 < nearest <= MOST_SYMMETRY and 1 / NEAR_FACTOR <= ratio <= NEAR_FACTOR:
-                    # near a whole number of repeats: a symmetric object, or tracks gone astray
-                    weak.append(f"{disagreement}; the object may repeat {nearest} times a turn")
-                else:
-                    notes.append(f"{disagreement}; the repetition is reported: on real footage tracks "
-                                 "that slide or mirror can bias a rate while a picture's return cannot")
-            else:
-                repeats, confirmed = found, True
-                if repeats > 1:
-                    notes.append(f"the picture repeats {repeats} times a turn (a symmetric object); "
-                                 "the tracks' rate tells which")
+    told = tell_repeats(period, tracks, tracks_used, turning)
+    repeats, confirmed = told.repeats, told.decided
+    weak.extend(told.weak)
+    if not (confirmed and repeats > 1 and period.excess > SAME_PICTURE):
+        notes.extend(told.notes)
+    else:
+        # a return after part of a turn that is not the same picture again: a look-alike view (a
+        # car's other side half a turn on), whose timing is no measure of a symmetric body's turn
+        confirmed = False
+        weak.append(f"the picture comes back after 1/{repeats} of a turn, but not exactly: it may be a view that looks "
+                    "alike rather than a symmetric body; the 95% interval holds the tracks' rate too")
+        if tracks is not None and 0 < tracks.omega_rad_s < math.inf:
+            told = replace(told, spanned_by=(tracks.omega_low_rad_s, tracks.omega_high_rad_s))
     omega, low, high = period.omega_rad_s(repeats)
     rate_from, spanned = "repetition", False
+    if not confirmed:  # the interval holds every count of repeats a turn still open: weak for that already
+        low = min(low, period.omega_rad_s(max(told.candidates))[1])
+        spanned = True
+        if told.spanned_by is not None:
+            low, high = min(low, told.spanned_by[0]), max(high, told.spanned_by[1])
     if period.far_apart and not confirmed and not _tracks_count_turns(period, omega, tracks, tracks_used):
         # how many repeats the closest return spans is a guess: the interval holds every count,
         # from one to under half a repeat a frame (rendered boxes at 10 and 25 rad/s, 30 frames/s,

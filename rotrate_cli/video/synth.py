@@ -66,6 +66,11 @@ class SceneConfig:
             ``second_omega_rad_s`` and axis ``second_axis_offset_px`` from the frame centre.
         seed: seeds the textures and the noise: same seed, same clip.
         supersample: rays per pixel along each side (antialiasing).
+        symmetry: the surface's texture repeats this many times a turn (bolts on a hub, a
+            patterned drum): the picture of a cylinder or sphere then comes back every
+            1/symmetry of a turn.
+        checker: the surface painted in a checker of 2 x ``symmetry`` columns round the axis and
+            bands up it, over its texture.
     """
 
     shape: str = "box"
@@ -89,6 +94,8 @@ class SceneConfig:
     second_axis_offset_px: float = 0.0
     seed: int = 0
     supersample: int = 2
+    symmetry: int = 1
+    checker: bool = False
 
     @property
     def frame_count(self) -> int:
@@ -301,8 +308,13 @@ class Renderer:
                 continue
             nearest[rays[hit]] = t[hit]
             points = origin[hit] + t[hit, None] * direction[hit]
+            if scene.symmetry > 1 or scene.checker:
+                points, sector = _folded(points, scene.symmetry)
             coords = (points + _TEXTURE_EXTENT) / (2 * _TEXTURE_EXTENT) * (body.texture.shape[0] - 1)
             albedo = ndimage.map_coordinates(body.texture, coords.T, order=1, mode="nearest")
+            if scene.checker:
+                band = np.floor(points[:, 1] / 0.25).astype(int)
+                albedo = np.where((sector + band) % 2 == 0, 0.35 + 0.5 * albedo, 0.5 * albedo)
             world_normal = normal[hit] @ to_object.T
             shade = 0.6 + 0.4 * np.clip(world_normal @ _LIGHT, 0.0, 1.0)
             image[rays[hit]] = (albedo * shade)[:, None] * body.tint[None, :]
@@ -380,3 +392,18 @@ def write_clip(scene: SceneConfig, path: str | Path, force: bool = False) -> dic
     partial.replace(path)
     partial_truth.replace(truth_path)
     return record
+
+
+def _folded(points: np.ndarray, symmetry: int) -> tuple[np.ndarray, np.ndarray]:
+    """Object points turned back about the axis (y) into the first of ``symmetry`` sectors, and
+    which half-sector each lay in (for a checker of 2 x ``symmetry`` columns)."""
+    sector = 2.0 * math.pi / max(symmetry, 1)
+    azimuth = np.mod(np.arctan2(points[:, 2], points[:, 0]), 2.0 * math.pi)
+    k = np.floor(azimuth / sector)
+    back = -k * sector
+    cos_b, sin_b = np.cos(back), np.sin(back)
+    folded = points.copy()
+    folded[:, 0] = points[:, 0] * cos_b - points[:, 2] * sin_b
+    folded[:, 2] = points[:, 0] * sin_b + points[:, 2] * cos_b
+    half = np.floor(np.mod(azimuth, sector) / (0.5 * sector)).astype(int)
+    return folded, half

@@ -1,0 +1,188 @@
+"""The picture's own turning: how fast a body turning in a plane (a record, a wheel, a fan, seen
+face on or obliquely) turns its picture about its axis, tested on pairs of consecutive frames.
+
+Each pair's first frame is turned about the axis by a trial angle, both ways, and compared with
+the second frame where the picture changes: what turns with the body matches one way only, while
+what does not turn (reflections, a still tonearm, concentric grooves that look alike at any angle)
+matches both ways alike and cancels in the difference of the two. The trial rates are the ones a
+return of the picture allows (a turn every 1, 2, 3 ... returns, and between), so the test says how
+many returns make a turn, which the return alone cannot (a fan of five blades comes back after a
+fifth of a turn). A body seen from the side does not turn its picture: no trial rate stands out,
+and the test says nothing.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from rotrate_cli.video.frames import Frame
+
+#: Pairs of consecutive frames kept over the clip (evenly spread), and their longer side, pixels.
+MOST_PAIRS = 24
+PAIR_SIDE_PX = 320
+#: Pixels whose grey level changes by more than this between the two frames are the moving area.
+MOVING_LEVELS = 6.0
+#: A pair is tested only where the moving area is at least this fraction of the picture.
+MIN_MOVING = 0.002
+
+
+@dataclass(frozen=True)
+class PictureTurning:
+    """How fast the picture turns, from pairs of nearby frames.
+
+    Attributes:
+        omega_rad_s: the trial rate that fits best (a magnitude), rad/s.
+        omega_low_rad_s, omega_high_rad_s: the range of trial rates that fit nearly as well.
+        sense: +1 anticlockwise, -1 clockwise, as the picture shows it.
+        pairs: the pairs kept; ``measured``: the pairs tested.
+    """
+
+    omega_rad_s: float
+    omega_low_rad_s: float
+    omega_high_rad_s: float
+    sense: int
+    pairs: int
+    measured: int
+
+    def holds(self, omega_rad_s: float, allowance: float = 0.0) -> bool:
+        """True when ``omega_rad_s`` lies in the interval widened by ``allowance`` (a fraction)."""
+        return self.omega_low_rad_s / (1 + allowance) <= omega_rad_s <= self.omega_high_rad_s * (1 + allowance)
+
+
+class FramePairs:
+    """Keeps pairs of consecutive frames, evenly over the clip, reduced to :data:`PAIR_SIDE_PX`
+    (a tap on the frame stream, as :class:`rotrate_cli.stages.period.Thumbnails`)."""
+
+    def __init__(self, most: int = MOST_PAIRS) -> None:
+        self._most = most
+        self._stride = 8
+        self._pairs: list[tuple[float, np.ndarray, float, np.ndarray]] = []
+        self._held: tuple[int, float, np.ndarray] | None = None
+
+    def clear(self) -> None:
+        self._pairs.clear()
+        self._held = None
+        self._stride = 8
+
+    @property
+    def pairs(self) -> list[tuple[float, np.ndarray, float, np.ndarray]]:
+        """``(time_s, image, next_time_s, next_image)`` per pair kept."""
+        return list(self._pairs)
+
+    def tap(self, frames: Iterator[Frame]) -> Iterator[Frame]:
+        """Yield ``frames`` unchanged, keeping some pairs of consecutive ones (grey or BGR)."""
+        for frame in frames:
+            index = frame.index
+            if self._held is not None and index == self._held[0] + 1:
+                self._pairs.append((self._held[1], self._held[2], frame.time_s, _reduced(frame.image)))
+                self._held = None
+                if len(self._pairs) > 2 * self._most:  # a long clip: every second pair kept
+                    self._stride *= 2
+                    self._pairs = self._pairs[::2]
+            if index % self._stride == 0:
+                self._held = (index, frame.time_s, _reduced(frame.image))
+            yield frame
+
+
+def _reduced(image: np.ndarray) -> np.ndarray:
+    if image.ndim == 3:
+        image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+    scale = PAIR_SIDE_PX / max(image.shape[:2])
+    if scale < 1:
+        image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    return np.asarray(image, dtype=np.uint8)
+
+
+#: Trial rates: a turn every ``x`` returns of the picture, for whole and half counts.
+TRIALS = tuple(sorted({float(k) for k in range(1, 65)} | {k + 0.5 for k in range(1, 8)} | {0.9}))
+#: Pairs tested at most (evenly over those kept).
+TESTED_PAIRS = 10
+#: The best trial must beat the median trial by this factor to tell anything.
+STANDS_OUT = 2.0
+#: Trials within this fraction of the best are left open with it.
+NEAR_BEST = 0.9
+
+
+def _moving(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    a = cv2.GaussianBlur(first.astype(np.float32), (0, 0), 1.0)
+    b = cv2.GaussianBlur(second.astype(np.float32), (0, 0), 1.0)
+    mask = np.abs(a - b) > MOVING_LEVELS
+    return (a, b, mask) if mask.mean() >= MIN_MOVING else None
+
+
+def _turn_matrix(centre: tuple[float, float], angle_deg: float, ellipse: tuple[float, float] | None) -> np.ndarray:
+    """The 2x3 map of a turn by ``angle_deg`` (anticlockwise as the picture shows it) about
+    ``centre`` of a plane whose circles appear as ellipses with their long axes along
+    ``ellipse[0]`` degrees (from the image x axis, y down) and ``ellipse[1]`` as wide as long."""
+    a = math.radians(angle_deg)
+    turn = np.array([[math.cos(a), math.sin(a)], [-math.sin(a), math.cos(a)]])
+    if ellipse is not None:
+        phi = math.radians(ellipse[0])
+        along = np.array([[math.cos(phi), -math.sin(phi)], [math.sin(phi), math.cos(phi)]])
+        width = min(max(ellipse[1], 0.05), 1.0)
+        squash = along @ np.diag([1.0, width]) @ along.T
+        turn = squash @ turn @ np.linalg.inv(squash)
+    c = np.asarray(centre)
+    return np.hstack([turn, (c - turn @ c)[:, None]])
+
+
+def _misfit(first: np.ndarray, second: np.ndarray, mask: np.ndarray, matrix: np.ndarray) -> float:
+    """The mean grey difference, where the picture changes, of ``second`` and ``first`` mapped by
+    ``matrix``."""
+    turned = cv2.warpAffine(first, matrix, (first.shape[1], first.shape[0]), flags=cv2.INTER_LINEAR,
+                            borderMode=cv2.BORDER_REPLICATE)
+    return float(np.mean(np.abs(turned[mask] - second[mask])))
+
+
+def turning_profile(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], centre_px: tuple[float, float],
+                    width_px: int, return_rad_s: float,
+                    ellipse: tuple[float, float] | None = None) -> np.ndarray | None:
+    """For each of :data:`TRIALS` ``x``, how much better the pairs' first frames turned by
+    ``return_rad_s / x`` times their time apart match their second frames one way than the other
+    (anticlockwise minus clockwise, summed over the pairs); None where no pair shows motion.
+    ``centre_px``: where the axis meets the picture, in the frame's own pixels (``width_px`` wide);
+    ``ellipse``: the direction (degrees) and width (to its length) of the circles' pictures, for
+    an oblique view (None: face on)."""
+    chosen = pairs[:: max(1, len(pairs) // TESTED_PAIRS)][:TESTED_PAIRS]
+    profile = np.zeros(len(TRIALS))
+    used = 0
+    for time_s, first, next_s, second in chosen:
+        step_s = next_s - time_s
+        moving = _moving(first, second) if step_s > 0 and first.shape == second.shape else None
+        if moving is None:
+            continue
+        a, b, mask = moving
+        scale = a.shape[1] / width_px
+        centre = (centre_px[0] * scale, centre_px[1] * scale)
+        for index, x in enumerate(TRIALS):
+            angle = math.degrees(return_rad_s / x * step_s)
+            # positive: the turn anticlockwise as the picture shows it fits better
+            profile[index] += (_misfit(a, b, mask, _turn_matrix(centre, -angle, ellipse))
+                               - _misfit(a, b, mask, _turn_matrix(centre, angle, ellipse)))
+        used += 1
+    return profile if used else None
+
+
+def picture_turning(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], centre_px: tuple[float, float],
+                    width_px: int, return_rad_s: float,
+                    ellipse: tuple[float, float] | None = None) -> PictureTurning | None:
+    """The picture's rate of turning among those a return of ``return_rad_s`` allows (see the
+    module's notes), with the range of trial rates that fit nearly as well as the best; None
+    where no trial stands out (a picture that does not turn, or too little that turns)."""
+    profile = turning_profile(pairs, centre_px, width_px, return_rad_s, ellipse)
+    if profile is None:
+        return None
+    strength = np.abs(profile)
+    best = int(np.argmax(strength))
+    typical = float(np.median(strength))
+    if not strength[best] > STANDS_OUT * max(typical, 1e-9):
+        return None
+    sense = 1 if profile[best] > 0 else -1
+    near = [x for x, value in zip(TRIALS, profile, strict=True) if sense * value >= NEAR_BEST * strength[best]]
+    rates = [return_rad_s / x for x in near]
+    return PictureTurning(return_rad_s / TRIALS[best], min(rates), max(rates), sense, len(pairs), len(pairs))
