@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
+.PHONY: bench-symmetry docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -84,6 +84,10 @@ bench-accuracy-reseed: $(STAMP)
 ## bench-hard: a hand's shake, flickering light, turns of tens of degrees a frame and motion blur done to renders, measured with default settings (about 3 minutes the first time)
 bench-hard: $(STAMP)
 	$(BIN)/python benchmarks/bench_hard.py
+
+## bench-symmetry: fans, spokes, checkered discs and drums whose picture repeats 2-16 times a turn, face on, tilted and from the side, slow and at 20-40 degrees a frame: right within 0.5% or weak, never a multiple called good (renders cached in bench_out/symmetry; about 2 minutes the first time)
+bench-symmetry: $(STAMP)
+	$(BIN)/python benchmarks/bench_symmetry.py
 
 ## bench-random: 20 random rendered conditions (lenses to 75 degrees, 2-6 s, elevation to 60) measured with default settings and --fixation auto (about 10 minutes the first time)
 bench-random: $(STAMP)

@@ -26,7 +26,7 @@ from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.runtime.pools import pipeline_threads
 from rotrate_cli.scene.focal import FocalEstimate
-from rotrate_cli.scene.reasons import name_rejections, track_places
+from rotrate_cli.scene.reasons import against_rate, name_rejections, track_places
 from rotrate_cli.scene.sense import not_side_view, sense_of_turning
 from rotrate_cli.scene.turning import PictureTurning, picture_turning
 from rotrate_cli.scene.view import View, keep_for_view, view_from_paths
@@ -43,7 +43,7 @@ from rotrate_cli.stages.fits import (
     thin,
 )
 from rotrate_cli.stages.geometry import Geometry, locate, measure
-from rotrate_cli.stages.period import Period, Thumbnails, find_period
+from rotrate_cli.stages.period import Period, Thumbnails, find_period, judged_series
 from rotrate_cli.stages.tracks import Footage, ProgressCallback, read_footage
 from rotrate_cli.stages.verdict import Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
@@ -232,7 +232,6 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         release_free_memory()
         geometry, result = measure(body, geometry, config, size_px, steady=lambda: repetition.result() is not None)
         period = repetition.result()
-    footage.thumbnails.clear()
     del body
     result = replace(result, features=name_rejections(result.features, places, geometry.fixation_px,
                                                       geometry.axis_angle_deg, result.combined.omega_rad_s,
@@ -240,12 +239,16 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     checked = check_rate(result, geometry, config, size_px, view_tracks, repeating=period is not None,
                          clock_resolution_s=footage.info.clock_resolution_s, fps=footage.info.fps)
     if checked.result.combined.tracks_used == 0 and period is not None:
+        footage.thumbnails.clear()
         return _repetition_only(footage, period, config, kept, view_tracks, checked.result, geometry)
     series = None
     if config.window_s is not None:
         series = rate_series(checked.result.offsets, config.window_s,
                              running_measure(config.method, config.rejection, geometry.camera(size_px)))
-    return _result(footage, config, geometry, checked, period, view_tracks, series=series, tracks=kept)
+    try:
+        return _result(footage, config, geometry, checked, period, view_tracks, series=series, tracks=kept)
+    finally:
+        footage.thumbnails.clear()
 
 
 def _picture_turning(footage: Footage, geometry: Geometry, view_tracks: pd.DataFrame | None,
@@ -302,6 +305,13 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     verdict = judge(tracks_rate, period, combined.tracks_used, checked.doubts,
                     turning=lambda: _picture_turning(footage, geometry, view_tracks, period))
     footage.pairs.clear()
+    features, tracks_used = result.features, combined.tracks_used
+    if verdict.rate_from == "repetition":  # the tracks shown as used are those that agree with it
+        features = against_rate(features, verdict.omega_rad_s)
+        tracks_used = int(features["inlier"].sum())
+    if isinstance(extra.get("series"), pd.DataFrame):
+        extra["series"] = judged_series(extra["series"], verdict, footage.thumbnails,  # type: ignore[arg-type]
+                                        footage.info.clock_resolution_s, config.window_s or 0.0)
     size_px = (footage.info.width_px, footage.info.height_px)
     direction, in_picture = result.direction, False
     if view_tracks is not None:
@@ -320,7 +330,7 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         fixation_px=geometry.fixation_px,
         omega_rad_s=verdict.omega_rad_s, omega_low_rad_s=verdict.omega_low_rad_s,
         omega_high_rad_s=verdict.omega_high_rad_s, direction=direction, direction_in_picture=in_picture,
-        tracks_total=int(len(result.features)), tracks_used=combined.tracks_used, features=result.features,
+        tracks_total=int(len(result.features)), tracks_used=tracks_used, features=features,
         offsets=result.offsets, rejection=config.rejection, warnings=warnings,
         axis_angle_deg=float(geometry.axis_angle_deg), axis_found=geometry.fixation_found,
         axis_angle_found=geometry.angle_from in ("motion", "paths", "lens"),

@@ -248,7 +248,9 @@ def test_spin_up_series_within_three_percent_at_whole_seconds(tmp_path: Path) ->
                                       "--window", "2", "--series-csv", str(series_path), "--format", "json"])
     assert result.exit_code == 0, result.output
     series = pd.read_csv(series_path)
-    assert list(series.columns) == ["time_s", "omega", "omega_low", "omega_high", "tracks_used"]
+    assert list(series.columns) == ["time_s", "omega", "omega_low", "omega_high", "tracks_used", "rate_from",
+                                    "quality"]
+    assert set(series["rate_from"]) == {"tracks"}  # a spin-up does not repeat: its tracks rate it
     whole = series[np.isclose(series["time_s"] % 1.0, 0.0) & (series["time_s"] >= 2.0)]
     assert len(whole) >= 5
     rate = truth["scene"]["omega_rad_s"] + truth["alpha_rad_s2"] * whole["time_s"]

@@ -296,3 +296,21 @@ def test_the_wheel_filmed_small_is_measured(tmp_path: Path, size: float) -> None
     assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.02)
     assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
     assert analysis.direction in ("ccw", "unknown")
+
+
+def test_the_record_s_windows_and_features_agree_with_its_return() -> None:
+    """omega(t) over 2-s windows of the record comes from the picture's return in each window,
+    as the headline does (the tracks read about 0.45 rad/s in every window before), and no
+    feature that reads another rate is shown as used."""
+    clip = VIDEOS / "record_oblique_closeup.mp4"
+    need(clip, "the record video")
+    truth = json.loads((VIDEOS / "record_oblique_closeup.truth.json").read_text())["omega"]
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None, window_s=2.0))
+    assert analysis.quality == "good" and analysis.omega_rad_s == pytest.approx(truth, rel=0.005)
+    series = analysis.series
+    holding = (series["omega_low_rad_s"] <= truth) & (truth <= series["omega_high_rad_s"])
+    assert holding.mean() >= 0.9 and (abs(series["omega_rad_s"] / truth - 1) <= 0.02).mean() >= 0.9
+    assert set(series["rate_from"]) == {"repetition"}
+    used = analysis.features[analysis.features["inlier"]]
+    assert (abs(used["omega_rad_s"].abs() / analysis.omega_rad_s - 1) <= 0.05).all()
+    assert "slides" in set(analysis.features["reason"])

@@ -176,14 +176,16 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
         **({} if analysis.series is None else {"series": [
             {"time_s": _number(row.time_s, 6), "omega": _number(row.omega_rad_s),
              "omega_low": _number(row.omega_low_rad_s), "omega_high": _number(row.omega_high_rad_s),
-             "tracks_used": int(row.tracks_used)}
+             "tracks_used": int(row.tracks_used), "rate_from": getattr(row, "rate_from", "tracks"),
+             "quality": getattr(row, "quality", "good")}
             for row in analysis.series.itertuples(index=False)
         ]}),
     }
 
 
 def series_csv(analysis: Analysis) -> str:
-    """omega(t) as CSV: ``time_s,omega,omega_low,omega_high,tracks_used`` (rad/s)."""
+    """omega(t) as CSV: ``time_s,omega,omega_low,omega_high,tracks_used`` (rad/s), and ``rate_from``,
+    ``quality`` per window."""
     series = analysis.series if analysis.series is not None else pd.DataFrame(
         columns=["time_s", "omega_rad_s", "omega_low_rad_s", "omega_high_rad_s", "tracks_used"])
     table = series.rename(columns={"omega_rad_s": "omega", "omega_low_rad_s": "omega_low",

@@ -128,3 +128,25 @@ def name_rejections(features: pd.DataFrame, places: pd.DataFrame, fixation_px: t
     reason[(reason == "disagrees") & inside] = "slides"
     reason[moving & ~inside] = "other_motion"
     return features.assign(reason=reason)
+
+
+#: A used track whose rate lies further than this (a fraction) from a rate measured otherwise is
+#: not counted as used.
+AGREE_WITHIN = 0.05
+
+
+def against_rate(features: pd.DataFrame, omega_rad_s: float) -> pd.DataFrame:
+    """The features measured against a rate that did not come from them (the picture's return):
+    used tracks that read more than :data:`AGREE_WITHIN` slower are marked ``slides`` (points that
+    slip along grooves and rims read slow), faster ``disagrees``; none of them is shown as used."""
+    if not (math.isfinite(omega_rad_s) and omega_rad_s > 0) or features.empty:
+        return features
+    rate = np.abs(features["omega_rad_s"].to_numpy(dtype=float))
+    used = features["inlier"].to_numpy(dtype=bool)
+    out = used & ~(np.abs(rate / omega_rad_s - 1.0) <= AGREE_WITHIN)
+    if not out.any():
+        return features
+    reason = features["reason"].to_numpy(dtype=object).copy()
+    reason[out] = np.where(rate[out] < omega_rad_s, "slides", "disagrees")
+    inlier = used & ~out
+    return features.assign(inlier=inlier, reason=reason)

@@ -130,13 +130,14 @@ def _by_tracks(period: Period, tracks: Combined | None, tracks_used: int) -> lis
 
 
 def _by_turning(period: Period, turning: PictureTurning | None) -> list[int] | None:
-    """The counts the picture's turning allows; None where it was not measured, or matches no
-    count (an alignment drawn to a still part of the picture)."""
+    """The one count the picture's turning tells; None where it was not measured or tells no
+    single count: a test that leaves several open is not sure enough to rule others out (flat
+    blades fit half their turn nearly as well as the whole)."""
     if turning is None:
         return None
     within = counts_within(period, turning.omega_low_rad_s / (1 + TURNING_ALLOWANCE),
                            turning.omega_high_rad_s * (1 + TURNING_ALLOWANCE))
-    return within or None
+    return within if len(within) == 1 else None
 
 
 def _listed(period: Period, counts: list[int] | tuple[int, ...]) -> str:

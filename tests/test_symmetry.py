@@ -1,0 +1,63 @@
+"""Bodies whose picture repeats n times a turn (rendered rotors and drums with known rates): the
+result is right or weak, never n times too fast and good; a marked blade is a turn."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from rotrate_cli import AnalysisConfig, analyze
+from rotrate_cli.scene.turning import FramePairs, picture_turning
+from rotrate_cli.video.decode import FrameSource
+from rotrate_cli.video.rotor import RotorScene, rotor_frames, write_rotor_clip
+
+
+def _measured(scene: RotorScene, tmp_path: Path):
+    path = tmp_path / "rotor.mp4"
+    truth = write_rotor_clip(scene, path)
+    return analyze(path, AnalysisConfig(fixation_px=None)), float(truth["omega_rad_s"])
+
+
+@pytest.mark.parametrize("scene", [
+    RotorScene("fan", 5, 2.0, texture=0.0, duration_s=3.0, seed=4),  # flat blades: little to track
+    RotorScene("spokes", 8, 1.2, texture=0.1, tilt_deg=55, duration_s=4.0, seed=9),
+    RotorScene("fan", 4, math.radians(35) * 30, texture=0.3, duration_s=2.0, seed=13),  # 35 degrees a frame
+], ids=["fan5-flat", "spokes8-tilted", "fan4-35deg-a-frame"])
+def test_a_symmetric_body_is_right_or_weak_never_a_multiple_called_good(scene: RotorScene, tmp_path: Path) -> None:
+    analysis, truth = _measured(scene, tmp_path)
+    assert analysis.quality == "weak" or analysis.omega_rad_s == pytest.approx(truth, rel=0.005)
+    assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
+
+
+def test_a_textured_fan_is_told_five_blades(tmp_path: Path) -> None:
+    analysis, truth = _measured(RotorScene("fan", 5, 2.0, duration_s=3.0, seed=5), tmp_path)
+    assert analysis.quality == "good" and analysis.omega_rad_s == pytest.approx(truth, rel=0.005)
+    assert analysis.verdict.repeats_per_turn == 5
+    assert any("repeats 5 times a turn" in w for w in analysis.warnings)
+
+
+def test_a_marked_blade_makes_the_return_a_turn(tmp_path: Path) -> None:
+    analysis, truth = _measured(RotorScene("fan", 5, 2.0, mark=True, duration_s=4.0, seed=6), tmp_path)
+    assert analysis.omega_rad_s == pytest.approx(truth, rel=0.005) and analysis.verdict.repeats_per_turn == 1
+
+
+def test_the_picture_s_turning_tells_a_fifth_of_a_turn(tmp_path: Path) -> None:
+    """Frames turned both ways at the rates a return allows: the body's own count fits best."""
+    scene = RotorScene("fan", 5, 2.0, duration_s=2.0, seed=5)
+    path = tmp_path / "fan.mp4"
+    write_rotor_clip(scene, path)
+    pairs = FramePairs()
+    for _ in pairs.tap(FrameSource(path).frames(grey=True)):
+        pass
+    found = picture_turning(pairs.pairs, scene.centre, scene.width_px, 5 * 2.0)
+    assert found is not None and found.sense == 1
+    assert found.omega_low_rad_s <= 2.0 <= found.omega_high_rad_s and found.omega_high_rad_s < 2.5
+
+
+def test_rotor_frames_are_the_exact_turn(tmp_path: Path) -> None:
+    """The renderer turns the picture by omega t: a 72-degree turn of a 5-fold fan is the same picture."""
+    scene = RotorScene("fan", 5, math.radians(72) * 30, noise=0.0, duration_s=0.1, seed=1)
+    first, second = list(rotor_frames(scene))[:2]
+    assert abs(first.astype(int) - second.astype(int)).mean() < 2.0

@@ -1,0 +1,88 @@
+"""The verdict stage (rotrate_cli.stages.verdict): a return of the picture is a turn only when
+something says so, and a count left open is weak with an interval that holds every count."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from rotrate_cli.fitting.outliers import Combined
+from rotrate_cli.scene.turning import PictureTurning
+from rotrate_cli.stages.period import Period
+from rotrate_cli.stages.verdict import MOST_REPEATS, judge, tell_repeats
+
+
+def _return(period_s: float = 0.5, repeats: int = 8, frames: int = 240) -> Period:
+    """A picture that comes back every ``period_s`` (exactly), seen ``repeats`` times."""
+    return Period(period_s, period_s - 0.001, period_s + 0.001, repeats, frames, 0.05, 0.9, 0.0, 0.0,
+                  period_s * 30.0)
+
+
+def _tracks(omega: float, half: float = 0.01, used: int = 50) -> Combined:
+    return Combined(omega, omega * (1 - half), omega * (1 + half), used)
+
+
+def test_a_return_alone_is_weak_and_its_interval_holds_every_count() -> None:
+    period = _return()
+    turn = 2 * math.pi / period.period_s
+    verdict = judge(None, period)
+    assert verdict.quality == "weak" and verdict.rate_from == "repetition"
+    assert verdict.omega_low_rad_s <= turn / MOST_REPEATS and verdict.omega_high_rad_s >= turn
+    assert "k = 5: " in verdict.weak_because[0]  # the candidates are listed with their rates
+
+
+@pytest.mark.parametrize("count", [1, 2, 3, 5, 8, 16])
+def test_tracks_that_fit_one_count_decide_it(count: int) -> None:
+    period = _return()
+    body = 2 * math.pi / period.period_s / count
+    verdict = judge(_tracks(body), period, 50)
+    assert (verdict.quality, verdict.repeats_per_turn) == ("good", count)
+    assert verdict.omega_rad_s == pytest.approx(body, rel=1e-6)
+    assert (count > 1) == any(f"repeats {count} times a turn" in note for note in verdict.notes)
+
+
+def test_loose_tracks_say_nothing_and_sliding_tracks_never_decide_a_count() -> None:
+    """Tracks that slide on grooves read several times too slow, with wide intervals (the record:
+    0.44 rad/s within [0, 0.88] under a 3.55 rad/s return): they are not evidence of a count."""
+    period = _return()
+    told = tell_repeats(period, Combined(0.44, 0.0, 0.88, 300), 300, None)
+    assert not told.decided and told.candidates == tuple(range(1, MOST_REPEATS + 1))
+
+
+def test_the_picture_s_turning_decides_where_the_tracks_do_not() -> None:
+    period = _return()
+    turn = 2 * math.pi / period.period_s
+    turning = PictureTurning(turn / 5, turn / 5.5, turn / 4.5, 1, 10, 10)
+    verdict = judge(Combined(0.1, 0.0, 5.0, 30), period, 30, turning=turning)
+    assert (verdict.quality, verdict.repeats_per_turn) == ("good", 5)
+    # asked only where needed: tracks that tell the count leave the turning unasked
+    asked = []
+    judge(_tracks(turn / 3), period, 50, turning=lambda: asked.append(1))
+    assert not asked
+
+
+def test_a_turning_that_leaves_several_counts_open_rules_none_out() -> None:
+    period = _return()
+    turn = 2 * math.pi / period.period_s
+    open_turning = PictureTurning(turn / 6, turn / 8, turn / 3.5, 1, 10, 10)  # 4..8 open
+    verdict = judge(None, period, turning=open_turning)
+    assert verdict.quality == "weak" and verdict.omega_high_rad_s >= turn  # the truth may be a whole turn
+
+
+def test_tracks_between_whole_counts_make_it_weak_and_the_interval_holds_both() -> None:
+    period = _return()
+    turn = 2 * math.pi / period.period_s
+    verdict = judge(_tracks(turn / 2.5), period, 50)
+    assert verdict.quality == "weak" and "not a whole number" in verdict.weak_because[0]
+    assert verdict.omega_low_rad_s <= turn / 2.5 * 0.99 and verdict.omega_high_rad_s >= turn
+
+
+def test_a_look_alike_half_turn_is_not_a_symmetric_body() -> None:
+    """A car's other side half a turn on: the return is not the same picture again (excess)."""
+    inexact = Period(10.0, 9.9, 10.1, 1, 60, 0.3, 0.8, 0.0, 0.2, 30.0)
+    turn = 2 * math.pi / 10.0
+    verdict = judge(_tracks(turn / 2 * 1.04, 0.05, 40), inexact, 40)
+    assert verdict.quality == "weak"
+    assert not any("repeats 2 times" in note for note in verdict.notes)
+    assert verdict.omega_low_rad_s <= turn / 2 * 1.04 * 0.95 <= verdict.omega_high_rad_s
