@@ -58,7 +58,11 @@ def _rate_from_text(analysis: Analysis) -> str:
     if analysis.rate_from != "repetition" or period is None:
         return "the tracks' fits"
     per_turn = analysis.verdict.repeats_per_turn if analysis.verdict is not None else 1
-    turn = "" if per_turn == 1 else f", {per_turn} repeats a turn"
+    told = analysis.verdict.repeats_told_by if analysis.verdict is not None else ""
+    if not told:
+        turn = "; a turn or a part of one: nothing tells"
+    else:
+        turn = f"; {'a turn' if per_turn == 1 else f'{per_turn} repeats a turn'}, as {told} tells"
     return (f"the clip's repetition: the picture repeats every {period.period_s:.4g} s "
             f"(seen {period.repeats} time(s){turn})")
 

@@ -200,6 +200,8 @@ class Verdict:
         quality: ``good`` or ``weak``.
         weak_because: why it is weak (empty when good).
         notes: what the user should know about how the two measurements compared.
+        repeats_told_by: with the repetition, what told how many repeats make a turn (``the
+            tracks' rate``, ``the picture's turning``); "" where nothing told it.
     """
 
     omega_rad_s: float
@@ -210,6 +212,7 @@ class Verdict:
     quality: str
     weak_because: tuple[str, ...]
     notes: tuple[str, ...]
+    repeats_told_by: str = ""
 
 
 def _half_width(omega: float, low: float, high: float) -> float:
@@ -289,7 +292,8 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                      "apart); the result is an average: see omega(t) with `window_s`")
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not spanned:  # spanned: weak for its doubt already
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
-    return Verdict(omega, low, high, rate_from, repeats, "weak" if weak else "good", tuple(weak), tuple(notes))
+    return Verdict(omega, low, high, rate_from, repeats, "weak" if weak else "good", tuple(weak), tuple(notes),
+                   told.told_by if confirmed else "")
 
 
 def turns_between(period: Period, tracks: Combined | None, tracks_used: int = 0) -> Period:
