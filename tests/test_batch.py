@@ -93,7 +93,6 @@ def test_expect_in_a_batch_marks_rows_off_target() -> None:
     (["--expect", "0.5"], "--tolerance"),
     (["--expect", "-1", "--tolerance", "1"], "--expect"),
     (["--expect", "0.5", "--tolerance", "-3"], "--tolerance"),
-    (["--output-dir", "."], "--output-dir"),
 ])
 def test_expectation_and_output_dir_usage_errors(options: list[str], word: str) -> None:
     code, _, stderr = _batch(str(CLIPS[0]), "--fixation", "auto", *options)
@@ -266,3 +265,10 @@ def test_an_output_folder_that_cannot_be_written(tmp_path: Path) -> None:
         assert result.exit_code == 2 and len(lines) == 1 and "cannot write" in lines[0]
     finally:
         locked.chmod(0o700)
+
+
+def test_output_dir_takes_one_input_too(tmp_path: Path) -> None:
+    """A glob the shell expanded to one file (README recipe 6): its report is written all the same."""
+    code, stdout, _ = _batch(str(CLIPS[0]), "--fixation", "auto", "--output-dir", str(tmp_path))
+    assert code == 0 and (tmp_path / f"{CLIPS[0].stem}.json").is_file()
+    assert CLIPS[0].name in stdout

@@ -171,15 +171,13 @@ def analyze_command(
         check_expectation(expect, tolerance)
         units = _units(scale, unit)
         sources = expand_inputs(videos)
-        if len(videos) > 1 or sources != videos:
+        if len(videos) > 1 or sources != videos or output_dir is not None:  # a glob of one file is a batch too
             if outputs.pictures_or_series:
                 raise InputError("--series-csv, --overlay and --plot take one input; with several, use --output-dir")
             return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, form, output, force,
                           strict)
         if scheduler is not None:
             raise InputError("--scheduler is for several inputs (a batch); with one, drop it")
-        if output_dir is not None:
-            raise InputError("--output-dir is for several inputs; with one, use --output")
         return _one(sources[0], config, outputs, form, units, quiet, expect, tolerance, strict)
 
     code = run(debug, job)
