@@ -43,10 +43,11 @@ from rotrate_cli.stages.fits import (
     thin,
 )
 from rotrate_cli.stages.geometry import Geometry, locate, measure
-from rotrate_cli.stages.period import Period, Thumbnails, find_period, judged_series
+from rotrate_cli.stages.period import Period, Thumbnails, find_period
 from rotrate_cli.stages.tracks import Footage, ProgressCallback, read_footage
 from rotrate_cli.stages.verdict import Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
+from rotrate_cli.stages.windows import judged_series
 from rotrate_cli.tracking.steady import CameraPath, Shake
 
 __all__ = ["Analysis", "AnalysisConfig", "ProgressCallback", "analyze", "analyze_tracks", "rates_from_offsets",

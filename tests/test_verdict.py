@@ -50,12 +50,17 @@ def test_loose_tracks_say_nothing_and_sliding_tracks_never_decide_a_count() -> N
     assert not told.decided and told.candidates == tuple(range(1, MOST_REPEATS + 1))
 
 
-def test_the_picture_s_turning_decides_where_the_tracks_do_not() -> None:
+def test_the_picture_s_turning_tells_a_whole_turn_where_the_tracks_do_not() -> None:
+    """The record: its tracks slide, its picture's turning says the return is a turn."""
     period = _return()
     turn = 2 * math.pi / period.period_s
-    turning = PictureTurning(turn / 5, turn / 5.5, turn / 4.5, 1, 10, 10)
-    verdict = judge(Combined(0.1, 0.0, 5.0, 30), period, 30, turning=turning)
-    assert (verdict.quality, verdict.repeats_per_turn) == ("good", 5)
+    whole = PictureTurning(turn, turn / 1.5, turn, -1, 10, 10)
+    verdict = judge(Combined(0.1, 0.0, 5.0, 30), period, 30, turning=whole)
+    assert (verdict.quality, verdict.repeats_per_turn, verdict.repeats_told_by) == ("good", 1,
+                                                                                      "the picture's turning")
+    # a turning that prefers a part of a turn is not taken at its word (a misplaced axis favours one)
+    part = PictureTurning(turn / 5, turn / 5.5, turn / 4.5, 1, 10, 10)
+    assert judge(Combined(0.1, 0.0, 5.0, 30), period, 30, turning=part).quality == "weak"
     # asked only where needed: tracks that tell the count leave the turning unasked
     asked = []
     judge(_tracks(turn / 3), period, 50, turning=lambda: asked.append(1))

@@ -142,15 +142,14 @@ def _misfit(first: np.ndarray, second: np.ndarray, mask: np.ndarray, matrix: np.
 def turning_profile(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], centre_px: tuple[float, float],
                     width_px: int, return_rad_s: float,
                     ellipse: tuple[float, float] | None = None) -> np.ndarray | None:
-    """For each of :data:`TRIALS` ``x``, how much better the pairs' first frames turned by
-    ``return_rad_s / x`` times their time apart match their second frames one way than the other
-    (anticlockwise minus clockwise, summed over the pairs); None where no pair shows motion.
+    """For each tested pair (rows) and each of :data:`TRIALS` ``x`` (columns), how much better the
+    pair's first frame turned by ``return_rad_s / x`` times their time apart matches its second
+    frame one way than the other (anticlockwise minus clockwise); None where no pair shows motion.
     ``centre_px``: where the axis meets the picture, in the frame's own pixels (``width_px`` wide);
     ``ellipse``: the direction (degrees) and width (to its length) of the circles' pictures, for
     an oblique view (None: face on)."""
     chosen = pairs[:: max(1, len(pairs) // TESTED_PAIRS)][:TESTED_PAIRS]
-    profile = np.zeros(len(TRIALS))
-    used = 0
+    rows = []
     for time_s, first, next_s, second in chosen:
         step_s = next_s - time_s
         moving = _moving(first, second) if step_s > 0 and first.shape == second.shape else None
@@ -159,13 +158,14 @@ def turning_profile(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], ce
         a, b, mask = moving
         scale = a.shape[1] / width_px
         centre = (centre_px[0] * scale, centre_px[1] * scale)
+        row = np.zeros(len(TRIALS))
         for index, x in enumerate(TRIALS):
             angle = math.degrees(return_rad_s / x * step_s)
             # positive: the turn anticlockwise as the picture shows it fits better
-            profile[index] += (_misfit(a, b, mask, _turn_matrix(centre, -angle, ellipse))
-                               - _misfit(a, b, mask, _turn_matrix(centre, angle, ellipse)))
-        used += 1
-    return profile if used else None
+            row[index] = (_misfit(a, b, mask, _turn_matrix(centre, -angle, ellipse))
+                          - _misfit(a, b, mask, _turn_matrix(centre, angle, ellipse)))
+        rows.append(row)
+    return np.array(rows) if rows else None
 
 
 def picture_turning(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], centre_px: tuple[float, float],
@@ -174,9 +174,10 @@ def picture_turning(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], ce
     """The picture's rate of turning among those a return of ``return_rad_s`` allows (see the
     module's notes), with the range of trial rates that fit nearly as well as the best; None
     where no trial stands out (a picture that does not turn, or too little that turns)."""
-    profile = turning_profile(pairs, centre_px, width_px, return_rad_s, ellipse)
-    if profile is None:
+    rows = turning_profile(pairs, centre_px, width_px, return_rad_s, ellipse)
+    if rows is None or len(rows) < 2:
         return None
+    profile = rows.sum(axis=0)
     strength = np.abs(profile)
     best = int(np.argmax(strength))
     typical = float(np.median(strength))
@@ -184,5 +185,10 @@ def picture_turning(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], ce
         return None
     sense = 1 if profile[best] > 0 else -1
     near = [x for x, value in zip(TRIALS, profile, strict=True) if sense * value >= NEAR_BEST * strength[best]]
+    # the pairs' two halves must each find their best within that range: a test that a few pairs
+    # sway (thin spokes, a picture turned a quarter) is no evidence
+    for half in (rows[0::2].sum(axis=0), rows[1::2].sum(axis=0)):
+        if not min(near) <= TRIALS[int(np.argmax(sense * half))] <= max(near):
+            return None
     rates = [return_rad_s / x for x in near]
-    return PictureTurning(return_rad_s / TRIALS[best], min(rates), max(rates), sense, len(pairs), len(pairs))
+    return PictureTurning(return_rad_s / TRIALS[best], min(rates), max(rates), sense, len(pairs), len(rows))

@@ -19,5 +19,7 @@ list of their calls.
 8. :mod:`~rotrate_cli.stages.view_at_rate`: after the verdict, the view read from the paths at
    the reported rate (it needs the rate), and on a repetition-rated face-on body, the axis.
 
+9. :mod:`~rotrate_cli.stages.windows`: with a window, omega(t) rated by the headline's source.
+
 :mod:`~rotrate_cli.stages.bodies` runs 3-7 once per rigid body (``segment``).
 """

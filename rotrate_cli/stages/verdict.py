@@ -115,29 +115,33 @@ def counts_within(period: Period, low_rad_s: float, high_rad_s: float, most: int
 
 
 def _by_tracks(period: Period, tracks: Combined | None, tracks_used: int) -> list[int] | None:
-    """The counts the tracks allow; None where they say nothing (too few, or too loose)."""
+    """The one count the tracks tell, or none ([]) where they fit no whole count; None where
+    they say nothing (too few, too loose, or several counts fit)."""
     if tracks is None or tracks_used < MIN_TRACKS or not 0 < tracks.omega_rad_s < math.inf:
         return None
     if _half_width(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s) > TRACKS_TELL:
         return None
     within = counts_within(period, tracks.omega_low_rad_s, tracks.omega_high_rad_s)
-    if len(within) == 1:
-        return within
-    if within:  # a high count: its neighbours lie inside the interval too
-        return within
-    return counts_within(period, tracks.omega_low_rad_s / (1 + TRACKS_ALLOWANCE),
-                         tracks.omega_high_rad_s * (1 + TRACKS_ALLOWANCE))
+    if not within:
+        within = counts_within(period, tracks.omega_low_rad_s / (1 + TRACKS_ALLOWANCE),
+                               tracks.omega_high_rad_s * (1 + TRACKS_ALLOWANCE))
+    # one count decides; several leave the others open too (tracks that slide on a rim read slow
+    # and can exclude the true count: the wheel turned a quarter read half its rate, weak, its
+    # interval missing it); none is a disagreement
+    return within if len(within) <= 1 else None
 
 
 def _by_turning(period: Period, turning: PictureTurning | None) -> list[int] | None:
-    """The one count the picture's turning tells; None where it was not measured or tells no
-    single count: a test that leaves several open is not sure enough to rule others out (flat
-    blades fit half their turn nearly as well as the whole)."""
+    """``[1]`` where the picture's turning tells that the return is a whole turn; None otherwise.
+    A test that leaves several counts open rules none out (flat blades fit half their turn
+    nearly as well as the whole), and one that prefers a part of a turn is not taken at its word:
+    about a misplaced axis a smaller turn fits better (the wheel's picture turned a quarter
+    preferred half its turn), so only a whole turn, which that error cannot favour, is told."""
     if turning is None:
         return None
     within = counts_within(period, turning.omega_low_rad_s / (1 + TURNING_ALLOWANCE),
                            turning.omega_high_rad_s * (1 + TURNING_ALLOWANCE))
-    return within if len(within) == 1 else None
+    return within if within == [1] else None
 
 
 def _listed(period: Period, counts: list[int] | tuple[int, ...]) -> str:

@@ -1,0 +1,47 @@
+"""omega(t) after the verdict: each window rated by the source behind the headline (the picture's
+return inside the window, or the tracks where they agree with it), with its own quality."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rotrate_cli.runtime.lazy import pandas as pd
+from rotrate_cli.stages.period import Thumbnails, find_period
+from rotrate_cli.stages.verdict import MIN_TRACKS, WEAK_HALF_WIDTH, Verdict
+
+
+def judged_series(series: pd.DataFrame, verdict: Verdict, thumbnails: Thumbnails, clock_resolution_s: float,
+                  window_s: float) -> pd.DataFrame:
+    """omega(t) from the source behind the headline (``series``: the tracks' windows, see
+    :func:`rotrate_cli.fitting.series.rate_series`), with ``rate_from`` and ``quality`` per window.
+    Where the headline is the picture's return, each window that holds a return is rated by it
+    (as many returns a turn as the headline's); a window with none keeps the tracks' rate where
+    it agrees with the headline, and is weak otherwise. Where the headline is the tracks', a
+    window is weak when its interval is wider than the verdict's rule or few tracks stand behind it."""
+    rows = series.copy()
+    rate_from = np.full(len(rows), "tracks", dtype=object)
+    quality = np.full(len(rows), "good", dtype=object)
+    omega = rows["omega_rad_s"].to_numpy(dtype=float).copy()
+    low = rows["omega_low_rad_s"].to_numpy(dtype=float).copy()
+    high = rows["omega_high_rad_s"].to_numpy(dtype=float).copy()
+    times = thumbnails.times_s
+    images = thumbnails.images
+    for index, centre in enumerate(rows["time_s"].to_numpy(dtype=float)):
+        found = None
+        if verdict.rate_from == "repetition" and len(times):
+            inside = (times >= centre - window_s / 2 - 1e-9) & (times <= centre + window_s / 2 + 1e-9)
+            if inside.sum() >= 8:
+                found = find_period(times[inside], images[inside], clock_resolution_s)
+        if found is not None and not found.far_apart:
+            omega[index], low[index], high[index] = found.omega_rad_s(verdict.repeats_per_turn)
+            rate_from[index] = "repetition"
+            agrees = abs(omega[index] / verdict.omega_rad_s - 1.0) <= WEAK_HALF_WIDTH
+            quality[index] = "good" if agrees and verdict.quality == "good" else "weak"
+            continue
+        half = max(omega[index] - low[index], high[index] - omega[index]) / omega[index] if omega[index] > 0 else np.inf
+        told = rows["tracks_used"].iloc[index] >= MIN_TRACKS and half <= WEAK_HALF_WIDTH
+        if verdict.rate_from == "repetition":
+            told = told and abs(omega[index] / verdict.omega_rad_s - 1.0) <= WEAK_HALF_WIDTH
+        quality[index] = "good" if told and np.isfinite(omega[index]) else "weak"
+    return rows.assign(omega_rad_s=omega, omega_low_rad_s=low, omega_high_rad_s=high, rate_from=rate_from,
+                       quality=quality)
