@@ -153,3 +153,13 @@ def test_no_library_message_names_a_flag():
                     and re.search(r"(?<![\w-])--[a-z][a-z-]+", node.value)):
                 named.append(f"{path.name}:{node.lineno}: {node.value[:60]}")
     assert not named, named
+
+
+def test_output_dash_is_standard_output(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``-o -`` writes the report to standard output, not to a file named '-'."""
+    monkeypatch.chdir(tmp_path)
+    result = runner.invoke(app, ["analyze", str(SAMPLES / "box_ortho.mp4"), "--fixation", "auto", "-o", "-",
+                                 "-f", "json", "-q"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["omega"] > 0
+    assert not (tmp_path / "-").exists()

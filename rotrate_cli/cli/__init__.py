@@ -177,6 +177,11 @@ def check_method(method: str) -> None:
         raise InputError(f"--method must be one of {', '.join(METHODS)}; got {method!r}")
 
 
+def standard_output(output: Path | None) -> Path | None:
+    """``-o -`` is standard output, as in the tools people pipe: None (no file) for ``-``."""
+    return None if output is not None and str(output) == "-" else output
+
+
 def emit(analysis: Analysis, fmt: str, output: Path | None, force: bool) -> None:
     from rotrate_cli.cli.report import render, render_table
 

@@ -32,6 +32,7 @@ from rotrate_cli.cli import (
     run,
     said,
     said_outcomes,
+    standard_output,
     wide_console,
 )
 from rotrate_cli.errors import InputError
@@ -159,14 +160,15 @@ def analyze_command(
     def job() -> int:
         from rotrate_cli.batch import check_expectation, expand_inputs
 
-        form = output_format(output, fmt)
+        report = standard_output(output)
+        form = output_format(report, fmt)
         check_format(form)
         check_method(method)
         config = _config(fixation=fixation, fps=fps, times=times, start=start, end=end, roi=roi, every=every,
                          method=method, fov=fov, focal_px=focal_px, axis_angle=axis_angle, angle_from=angle_from,
                          elevation=elevation, direction=direction, window=window, track=track,
                          tracker_kind=tracker_kind, segment=segment, blur=blur, keep_tracks=overlay is not None)
-        outputs = _Outputs(output, series_csv_path, overlay, plot, force)
+        outputs = _Outputs(report, series_csv_path, overlay, plot, force)
         outputs.check(window)  # before a long run, not after
         check_expectation(expect, tolerance)
         units = _units(scale, unit)
@@ -174,7 +176,7 @@ def analyze_command(
         if len(videos) > 1 or sources != videos or output_dir is not None:  # a glob of one file is a batch too
             if outputs.pictures_or_series:
                 raise InputError("--series-csv, --overlay and --plot take one input; with several, use --output-dir")
-            return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, form, output, force,
+            return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, form, report, force,
                           strict)
         if scheduler is not None:
             raise InputError("--scheduler is for several inputs (a batch); with one, drop it")

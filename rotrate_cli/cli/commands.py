@@ -27,6 +27,7 @@ from rotrate_cli.cli import (
     in_flags,
     run,
     said_outcomes,
+    standard_output,
     wide_console,
 )
 from rotrate_cli.errors import InputError, RotrateError, SettingError
@@ -147,14 +148,15 @@ def omega_command(
         from rotrate_cli.analysis import analyze_tracks
         from rotrate_cli.tracking.tracks_io import read_tracks
 
-        form = output_format(output, fmt)
+        report = standard_output(output)
+        form = output_format(report, fmt)
         check_format(form)
         check_method(method)
         table = read_tracks(tracks, position_column)
         unit = position_column.rsplit("_", 1)[1] if "_" in position_column else "units"
         analysis = analyze_tracks(table, fixation, source=str(tracks), fps=fps, every=every, method=method,
                                   position_unit=unit)
-        emit(analysis, form, output, force)
+        emit(analysis, form, report, force)
         return 0
 
     run(debug, job)
