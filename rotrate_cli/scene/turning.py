@@ -29,6 +29,14 @@ PAIR_SIDE_PX = 320
 MOVING_LEVELS = 6.0
 #: A pair is tested only where the moving area is at least this fraction of the picture.
 MIN_MOVING = 0.002
+#: Trial rates: a turn every ``x`` returns of the picture, for whole and half counts.
+TRIALS = tuple(sorted({float(k) for k in range(1, 65)} | {k + 0.5 for k in range(1, 8)} | {0.9}))
+#: Pairs tested at most (evenly over those kept).
+TESTED_PAIRS = 10
+#: The best trial must beat the median trial by this factor to tell anything.
+STANDS_OUT = 2.0
+#: Trials within this fraction of the best are left open with it.
+NEAR_BEST = 0.9
 
 
 @dataclass(frozen=True)
@@ -48,10 +56,6 @@ class PictureTurning:
     sense: int
     pairs: int
     measured: int
-
-    def holds(self, omega_rad_s: float, allowance: float = 0.0) -> bool:
-        """True when ``omega_rad_s`` lies in the interval widened by ``allowance`` (a fraction)."""
-        return self.omega_low_rad_s / (1 + allowance) <= omega_rad_s <= self.omega_high_rad_s * (1 + allowance)
 
 
 class FramePairs:
@@ -96,16 +100,6 @@ def _reduced(image: np.ndarray) -> np.ndarray:
     if scale < 1:
         image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
     return np.asarray(image, dtype=np.uint8)
-
-
-#: Trial rates: a turn every ``x`` returns of the picture, for whole and half counts.
-TRIALS = tuple(sorted({float(k) for k in range(1, 65)} | {k + 0.5 for k in range(1, 8)} | {0.9}))
-#: Pairs tested at most (evenly over those kept).
-TESTED_PAIRS = 10
-#: The best trial must beat the median trial by this factor to tell anything.
-STANDS_OUT = 2.0
-#: Trials within this fraction of the best are left open with it.
-NEAR_BEST = 0.9
 
 
 def _moving(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
