@@ -1,8 +1,8 @@
 """The whole job in one call: :func:`analyze` for a video, :func:`analyze_tracks` for tracks.
 
 A composition of the stages of :mod:`rotrate_cli.stages`, top to bottom, in the order that
-package lists them: tracks, period, geometry (camera, fits), checks, verdict, and the view at
-the reported rate.
+package lists them: tracks, period, geometry (camera, fits), checks, verdict, the view at the
+reported rate, and omega(t)'s windows.
 """
 
 from __future__ import annotations

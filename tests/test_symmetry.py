@@ -61,3 +61,8 @@ def test_rotor_frames_are_the_exact_turn(tmp_path: Path) -> None:
     scene = RotorScene("fan", 5, math.radians(72) * 30, noise=0.0, duration_s=0.1, seed=1)
     first, second = list(rotor_frames(scene))[:2]
     assert abs(first.astype(int) - second.astype(int)).mean() < 2.0
+
+
+def test_no_axis_no_turning_test() -> None:
+    """Where no axis was given or found (NaN), the test of the picture's turning says nothing."""
+    assert picture_turning([], (math.nan, math.nan), 640, 2.0) is None

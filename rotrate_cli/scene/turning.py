@@ -168,6 +168,8 @@ def picture_turning(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], ce
     """The picture's rate of turning among those a return of ``return_rad_s`` allows (see the
     module's notes), with the range of trial rates that fit nearly as well as the best; None
     where no trial stands out (a picture that does not turn, or too little that turns)."""
+    if not (math.isfinite(centre_px[0]) and math.isfinite(centre_px[1]) and return_rad_s > 0):
+        return None  # no axis to turn about (none given, none found)
     rows = turning_profile(pairs, centre_px, width_px, return_rad_s, ellipse)
     if rows is None or len(rows) < 2:
         return None
