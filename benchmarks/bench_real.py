@@ -104,7 +104,19 @@ def parts() -> list[Case]:
             for start_s, end_s in spans:
                 found.append(Case(f"{name} {start_s:g}-{end_s:g} s", videos / f"{name}.mp4", truth["omega"], math.inf,
                                   None, start_s=start_s, end_s=end_s))
+            # under a turn (issue 49's parts): 0.3, 0.6 and 0.9 of a turn, the wheel past its still first frame
+            turn_s = 2.0 * math.pi / truth["omega"]
+            for start_s in (UNDER_TURN_START_S[name], UNDER_TURN_START_S[name] + 10.0 * 0.5):
+                for share in UNDER_TURN_SHARES:
+                    end_s = start_s + share * turn_s
+                    found.append(Case(f"{name} {share:g} turn ({start_s:g}-{end_s:.2f} s)", videos / f"{name}.mp4",
+                                      truth["omega"], math.inf, None, start_s=start_s, end_s=end_s))
     return found
+
+
+#: Parts under a turn of the record and the wheel: these shares of a turn, from these times (and 5 s on).
+UNDER_TURN_SHARES = (0.3, 0.6, 0.9)
+UNDER_TURN_START_S = {"record_oblique_closeup": 0.0, "bicycle_wheel_frontal": 0.3}
 
 
 #: Each car's turn in parts: this many photographs...

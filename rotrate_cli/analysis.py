@@ -25,7 +25,9 @@ from rotrate_cli.fitting.series import rate_series
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.runtime.pools import pipeline_threads
+from rotrate_cli.scene.disc import DiscView
 from rotrate_cli.scene.focal import FocalEstimate
+from rotrate_cli.scene.picture_angle import PictureAngle, measure_angle
 from rotrate_cli.scene.reasons import against_rate, name_rejections, track_places
 from rotrate_cli.scene.sense import not_side_view, sense_of_turning
 from rotrate_cli.scene.turning import PictureTurning, picture_turning
@@ -223,7 +225,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
             geometry, body = locate(tracks, footage.motion_angle_deg, config, footage.info,
                                     seek_lens=lambda: repetition.result() is None, keyframes=footage.keyframes)
         except NoResultError:
-            if repetition.result() is None:
+            if repetition.result() is None and config.method != "fit":
                 raise
             return _repetition_only(footage, repetition.result(), config, kept, view_tracks)
         finally:
@@ -239,7 +241,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
                                                       result.offsets))
     checked = check_rate(result, geometry, config, size_px, view_tracks, repeating=period is not None,
                          clock_resolution_s=footage.info.clock_resolution_s, fps=footage.info.fps)
-    if checked.result.combined.tracks_used == 0 and period is not None:
+    if checked.result.combined.tracks_used == 0 and (period is not None or config.method == "fit"):
         footage.thumbnails.clear()
         return _repetition_only(footage, period, config, kept, view_tracks, checked.result, geometry)
     series = None
@@ -265,6 +267,31 @@ def _picture_turning(footage: Footage, geometry: Geometry, view_tracks: pd.DataF
         return picture_turning(footage.pairs.pairs, geometry.fixation_px, footage.info.width_px, rate)
     ellipse = (view.across_deg, math.sin(math.radians(view.elevation_deg)))
     return picture_turning(footage.pairs.pairs, view.centre_px, footage.info.width_px, rate, ellipse)
+
+
+def _picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFrame | None,
+                   tracks: Combined | None) -> PictureAngle | None:
+    """The picture's own turning angle (:mod:`rotrate_cli.scene.picture_angle`), where the picture
+    can turn: not in a side view. Its plane's view is sought from the tracks' paths' (their
+    centre and ellipse, at the tracks' rate) where they tell one, else from the fixation, every
+    tilt tried."""
+    if view_tracks is None or len(view_tracks) == 0:
+        return None
+    rate = tracks.omega_rad_s if tracks is not None and 0 < tracks.omega_rad_s < math.inf else math.nan
+    view = view_from_paths(view_tracks, rate) if math.isfinite(rate) else None
+    if not not_side_view(view, view_tracks):
+        return None  # seen from the side the picture does not turn
+    width = footage.info.width_px
+    kept = footage.pairs.angle_frames.frames
+    if view is not None:
+        start = DiscView(view.centre_px, view.across_deg, 90.0 - view.elevation_deg, float(width))
+    else:
+        centre = geometry.fixation_px
+        if not (math.isfinite(centre[0]) and math.isfinite(centre[1])):
+            centre = (width / 2.0, footage.info.height_px / 2.0)
+        start = DiscView(centre, 0.0, 0.0, float(width))
+    return measure_angle(kept, start, width, search_tilt=view is None,
+                         search_centre=view is None and geometry.fixation_found)
 
 
 def _angle_guess(footage: Footage, config: AnalysisConfig) -> float:
@@ -298,16 +325,23 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     neither gave a rate."""
     result = checked.result
     combined = result.combined
-    if combined.tracks_used == 0 and period is None:
-        raise NoResultError(no_result_message(result.features))
     tracks_rate = combined if combined.tracks_used > 0 else None
+    def measured_angle() -> PictureAngle | None:
+        return _picture_angle(footage, geometry, view_tracks, tracks_rate)
+
+    angle: PictureAngle | None | Callable[[], PictureAngle | None] = measured_angle
+    if combined.tracks_used == 0 and period is None:
+        # no track and no return: the picture's own turning alone, where it tells a rate
+        angle = _picture_angle(footage, geometry, view_tracks, None) if config.method == "fit" else None
+        if angle is None:
+            raise NoResultError(no_result_message(result.features))
     if period is not None:
         period = turns_between(period, tracks_rate, combined.tracks_used)
     verdict = judge(tracks_rate, period, combined.tracks_used, checked.doubts,
-                    turning=lambda: _picture_turning(footage, geometry, view_tracks, period))
+                    turning=lambda: _picture_turning(footage, geometry, view_tracks, period), angle=angle)
     footage.pairs.clear()
     features, tracks_used = result.features, combined.tracks_used
-    if verdict.rate_from == "repetition":  # the tracks shown as used are those that agree with it
+    if verdict.rate_from in ("repetition", "turning"):  # the tracks shown as used are those that agree with it
         features = against_rate(features, verdict.omega_rad_s)
         tracks_used = int(features["inlier"].sum())
     if isinstance(extra.get("series"), pd.DataFrame):
@@ -319,7 +353,11 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         geometry = view_at_rate(geometry, view_tracks, verdict.omega_rad_s, verdict.rate_from, size_px)
         direction, in_picture = sense_of_turning(direction, geometry.view, view_tracks, geometry.fixation_px,
                                                  verdict.omega_rad_s)
-    warnings = footage.warnings + geometry.notes + notes + checked.notes + verdict.notes
+    checks = checked.notes
+    if verdict.rate_from == "turning" and checks:  # the tracks' own checks are of a rate not reported
+        checks = (f"the tracks' own rate ({combined.omega_rad_s:.4g} rad/s) is not the one reported; "
+                  f"{len(checks)} check(s) of it are left out",)
+    warnings = footage.warnings + geometry.notes + notes + checks + verdict.notes
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
     camera = geometry.camera(size_px)
@@ -342,12 +380,13 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     )
 
 
-def _repetition_only(footage: Footage, period: Period, config: AnalysisConfig, kept: pd.DataFrame | None,
+def _repetition_only(footage: Footage, period: Period | None, config: AnalysisConfig, kept: pd.DataFrame | None,
                      view_tracks: pd.DataFrame, result: RateResult | None = None,
                      geometry: Geometry | None = None) -> Analysis:
     """The Analysis when no track gave a rate but the clip repeats: the rate is the repetition's,
     the sense of turning unknown, and the fixation the one given (else found from the paths'
-    centre by the view, where they tell one)."""
+    centre by the view, where they tell one). Where the clip does not repeat either (under a
+    turn), the picture's own turning alone (NoResultError where it tells no rate)."""
     features = result.features if result is not None else pd.DataFrame(columns=list(FEATURE_COLUMNS))
     offsets = result.offsets if result is not None else pd.DataFrame(
         {"track": pd.Series(dtype=int), "frame": pd.Series(dtype=int), "time_s": pd.Series(dtype=float),
@@ -360,8 +399,8 @@ def _repetition_only(footage: Footage, period: Period, config: AnalysisConfig, k
     geometry = replace(geometry, fixation_px=(float(fixation[0]), float(fixation[1])))
     hint = ("; CSRT loses points that jump far between frames (stills taken far apart, fast turns): the default "
             "`tracker_kind='klt'` follows those") if config.tracker_kind == "csrt" else ""
-    note = ("no track gave a rate: the rate is the clip's repetition alone, and the sense of turning "
-            f"is unknown{hint}")
+    source = "the clip's repetition" if period is not None else "the picture's turning"
+    note = f"no track gave a rate: the rate is {source} alone, and the sense of turning is unknown{hint}"
     return _result(footage, config, geometry, Checked(empty), period, view_tracks, notes=(note,),
                    method=config.method, focal=None, camera=None, series=None, tracks=kept)
 

@@ -55,6 +55,8 @@ def _view_text(analysis: Analysis) -> str:
 def _rate_from_text(analysis: Analysis) -> str:
     """Where the reported rate comes from, in words."""
     period = analysis.period
+    if analysis.rate_from == "turning":
+        return "the picture's turning: its angle about the axis, frame by frame"
     if analysis.rate_from != "repetition" or period is None:
         return "the tracks' fits"
     per_turn = analysis.verdict.repeats_per_turn if analysis.verdict is not None else 1

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from rotrate_cli.scene.picture_angle import AngleFrames
 from rotrate_cli.video.frames import Frame
 
 #: Pairs of consecutive frames kept over the clip (evenly spread), and their longer side, pixels.
@@ -64,6 +65,9 @@ class FramePairs:
 
     def __init__(self, most: int = MOST_PAIRS) -> None:
         self._most = most
+        #: the frames kept for the picture's turning angle (:mod:`rotrate_cli.scene.picture_angle`),
+        #: from the same stream
+        self.angle_frames = AngleFrames()
         self._stride = 8
         self._pairs: list[tuple[float, np.ndarray, float, np.ndarray]] = []
         self._held: tuple[int, float, np.ndarray] | None = None
@@ -72,6 +76,7 @@ class FramePairs:
         self._pairs.clear()
         self._held = None
         self._stride = 8
+        self.angle_frames.clear()
 
     @property
     def pairs(self) -> list[tuple[float, np.ndarray, float, np.ndarray]]:
@@ -79,8 +84,9 @@ class FramePairs:
         return list(self._pairs)
 
     def tap(self, frames: Iterator[Frame]) -> Iterator[Frame]:
-        """Yield ``frames`` unchanged, keeping some pairs of consecutive ones (grey or BGR)."""
-        for frame in frames:
+        """Yield ``frames`` unchanged, keeping some pairs of consecutive ones (grey or BGR), and
+        the frames for the picture's angle."""
+        for frame in self.angle_frames.tap(frames):
             index = frame.index
             if self._held is not None and index == self._held[0] + 1:
                 self._pairs.append((self._held[1], self._held[2], frame.time_s, _reduced(frame.image)))

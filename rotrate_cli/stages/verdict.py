@@ -41,6 +41,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from rotrate_cli.fitting.outliers import Combined
+from rotrate_cli.scene.picture_angle import PictureAngle
 from rotrate_cli.scene.turning import PictureTurning
 from rotrate_cli.stages.period import SAME_PICTURE, Period
 
@@ -199,7 +200,7 @@ class Verdict:
 
     Attributes:
         omega_rad_s, omega_low_rad_s, omega_high_rad_s: the rate and its 95% interval (rad/s).
-        rate_from: ``tracks`` or ``repetition``.
+        rate_from: ``tracks``, ``repetition`` or ``turning`` (the picture's own turning angle).
         repeats_per_turn: with the repetition, how many repeats make a turn (1 usually).
         quality: ``good`` or ``weak``.
         weak_because: why it is weak (empty when good).
@@ -228,18 +229,25 @@ def _half_width(omega: float, low: float, high: float) -> float:
 
 def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
           doubts: tuple[str, ...] = (),
-          turning: PictureTurning | Callable[[], PictureTurning | None] | None = None) -> Verdict:
+          turning: PictureTurning | Callable[[], PictureTurning | None] | None = None,
+          angle: PictureAngle | Callable[[], PictureAngle | None] | None = None) -> Verdict:
     """The reported rate from the tracks' combined rate (None: no track gave one) and the
     clip's repetition (None: none seen); ``tracks_used`` tracks stand behind ``tracks``;
     ``doubts`` about the tracks' rate (a given fixation the tracks disagree with) make a
     tracks-only result weak and are notes beside the repetition's. ``turning``: the picture's
     own turning (:mod:`rotrate_cli.scene.turning`), or a call that measures it, made only where
-    the tracks do not tell how many repeats make a turn.
+    the tracks do not tell how many repeats make a turn. ``angle``: the picture's own turning
+    angle (:mod:`rotrate_cli.scene.picture_angle`), or a call that measures it, made only where
+    the picture does not come back (under a turn): where it gives a rate, that rate is reported
+    (:func:`_by_angle`).
 
     Raises:
         ValueError: neither measurement is given.
     """
     if period is None:
+        measured = angle() if callable(angle) else angle
+        if measured is not None:
+            return _by_angle(measured, tracks, tracks_used, doubts)
         if tracks is None:
             raise ValueError("no measurement to judge")
         return _tracks_only(tracks, tracks_used, doubts)
@@ -381,3 +389,41 @@ def _tracks_only(tracks: Combined, tracks_used: int, doubts: tuple[str, ...]) ->
         weak.append(f"only {tracks_used} track(s) agree")
     return Verdict(tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s, "tracks", 1,
                    "weak" if weak else "good", tuple(weak), ())
+
+
+def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, doubts: tuple[str, ...]) -> Verdict:
+    """The rate of the picture's own turning angle, where the picture does not come back. The
+    tracks confirm it or not: informative tracks (enough of them, within :data:`TRACKS_TELL`)
+    that miss it by more than :data:`TRACKS_ALLOWANCE` beyond their interval make it weak, their
+    rate is reported, and the interval spans both; loose tracks (sliding along grooves and rims) are only noted. A first
+    step that another shift fits as well (a symmetric body turning fast) leaves the turn open:
+    weak, with the other reading."""
+    omega, low, high = angle.omega_rad_s, angle.omega_low_rad_s, angle.omega_high_rad_s
+    weak: list[str] = []
+    notes = [f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, measured through "
+             f"the plane's view (tilted {angle.view.tilt_deg:.0f} degrees)"]
+    notes.extend(doubts)
+    if angle.alike_deg is not None and angle.first_step_deg != 0:
+        other = omega * abs(angle.alike_deg / angle.first_step_deg)
+        weak.append(f"the picture's turning between frames fits {abs(angle.first_step_deg):.1f} and "
+                    f"{abs(angle.alike_deg):.1f} degrees alike (a body that looks alike several times a turn, "
+                    f"turning fast): {omega:.4g} or {other:.4g} rad/s; the 95% interval holds both")
+        low, high = min(low, other), max(high, other)
+    if tracks is not None and 0 < tracks.omega_rad_s < math.inf:
+        told = tracks_used >= MIN_TRACKS and _half_width(
+            tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s) <= TRACKS_TELL
+        agrees = (tracks.omega_low_rad_s / (1 + TRACKS_ALLOWANCE) <= omega
+                  <= tracks.omega_high_rad_s * (1 + TRACKS_ALLOWANCE))
+        if told and not agrees:
+            # the tracks' rate is reported (their model is the paper's, and they agree among
+            # themselves); the interval holds both
+            weak.append(f"the picture's turning ({omega:.4g} rad/s) disagrees with the tracks' rate "
+                        f"({tracks.omega_rad_s:.4g} rad/s), which is reported; the 95% interval holds both")
+            low, high = min(low, tracks.omega_low_rad_s), max(high, tracks.omega_high_rad_s)
+            return Verdict(tracks.omega_rad_s, low, high, "tracks", 1, "weak", tuple(weak), tuple(notes[1:]))
+        elif not agrees:
+            notes.append(f"the tracks read {tracks.omega_rad_s:.4g} rad/s, loosely (points that slide along "
+                         "grooves or rims, or stay on reflections): they do not stand behind the rate")
+    if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not weak:
+        weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
+    return Verdict(omega, low, high, "turning", 1, "weak" if weak else "good", tuple(weak), tuple(notes))

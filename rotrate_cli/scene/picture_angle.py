@@ -1,0 +1,329 @@
+"""The picture's own turning angle, frame by frame: the rate of a body turning in a plane (a record,
+a wheel, a fan, a clock, a turntable seen from above) from part of a turn, without tracks.
+
+The picture is unrolled about the axis through the plane's view (:mod:`rotrate_cli.scene.disc`);
+there the body's turn is a shift along the angle. What is compared is the picture's change from
+one frame to the next, not the picture: what stays still (a background, a hub, a reflection, a
+tonearm) does not change and drops out, and each ring's mean is taken out (grooves and plain rims,
+alike at every angle, carry no angle). The changes of two moments line up when shifted by the
+angle turned between them; the shift is found by correlation along the angle, to a fraction of a
+sample.
+
+The angles are chained from nearby changes (which tell the turn's sense and unwrap it), and the
+rate is fitted to the shifts between changes far apart (up to :data:`FARTHEST_DEG`), with an
+offset: the shift between nearby changes is pulled a little towards none by what changes without
+turning (the shared record read 1.7% slow from steps of 8 degrees, 0.0% over 170), and an offset
+common to every pair does not bias the slope. The interval holds the fit's scatter and how far the
+rate moves when the view's lens and tilt are varied within what the picture allows (a view found
+from part of a turn is uncertain, and turns the picture unevenly where wrong).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
+
+import cv2
+import numpy as np
+
+from rotrate_cli.scene.disc import (
+    DiscView,
+    fitted_view,
+    moving_weight,
+    ring_correlation,
+    second_peak,
+    shift_deg,
+    unrolled,
+)
+from rotrate_cli.video.frames import Frame
+
+#: Frames kept (in runs of two consecutive ones, evenly over the clip), and their longer side, px.
+MOST_KEPT = 128
+SIDE_PX = 320
+#: Changes measured at most (evenly over those kept), angles a turn and rings of the measurement.
+MOST_CHANGES = 96
+ANGLES = 720
+RINGS = 128
+#: A change is compared with a new one once the picture has turned this far from it.
+KEY_DEG = 60.0
+#: Nearby shifts are sought within this (plus a share of the shift) of the one the rate so far
+#: predicts (from the median slope of the :data:`RECENT` latest angles).
+PREDICTED_WITHIN_DEG = 4.0
+PREDICTED_SHARE = 0.15
+RECENT = 8
+#: A change whose peak is lower than this fraction of the typical one is left out.
+WEAK_PEAK = 0.5
+#: Changes this far apart (at most) time the rate.
+FARTHEST_DEG = 150.0
+#: Fewer changes than this, or a turn smaller than this, tell no rate.
+MIN_CHANGES = 6
+MIN_TURNED_DEG = 15.0
+#: The changes must line up at least this well (median peak correlation) to tell a rate.
+MIN_SCORE = 0.3
+#: How far the view is varied for the interval: its tilt (degrees), its axis's point (of the width).
+TILT_VARIED_DEG = 2.0
+CENTRE_VARIED = 0.004
+#: Views more tilted than this (degrees), or through a lens shorter than this (focal length, of
+#: the picture's width), are no plane's a camera sees turning: a side view's cylinder fitted 85
+#: degrees through a 5-pixel lens and read 0.25 rad/s for 0.7 before this rule.
+MOST_TILT_DEG = 80.0
+SHORTEST_FOCAL = 0.3
+#: A rate whose interval's half is wider than this fraction of it is no measurement.
+LOOSEST = 0.5
+#: Another shift that fits nearly as well (this fraction of the best) leaves the turn open.
+ALIKE_PEAK = 0.9
+
+
+@dataclass(frozen=True)
+class PictureAngle:
+    """The picture's turning angle over the clip and the rate it gives.
+
+    Attributes:
+        omega_rad_s: the rate (a magnitude), rad/s; ``omega_low_rad_s``, ``omega_high_rad_s``: its
+            95% interval.
+        sense: +1 anticlockwise, -1 clockwise, as the picture shows it.
+        times_s, angles_deg: the angle turned (signed, from the first change) at each change measured.
+        turned_deg: the angle turned over the changes measured (a magnitude).
+        score: how well the changes line up (median peak correlation, 1 at best).
+        view: the plane's view the angle was measured through (the picture's own pixels).
+        alike_deg: the first step's other shift that fits nearly as well (a symmetric body turning
+            fast), or None.
+        first_step_deg: the first step measured, against which ``alike_deg`` is an alternative.
+    """
+
+    omega_rad_s: float
+    omega_low_rad_s: float
+    omega_high_rad_s: float
+    sense: int
+    times_s: np.ndarray
+    angles_deg: np.ndarray
+    turned_deg: float
+    score: float
+    view: DiscView
+    alike_deg: float | None = None
+    first_step_deg: float = 0.0
+
+
+class AngleFrames:
+    """Keeps frames for the picture's angle: in runs of two consecutive ones, at most
+    :data:`MOST_KEPT` (every other run let go, and the spacing doubled, when more come), reduced to
+    :data:`SIDE_PX` (a tap on the frame stream, as :class:`rotrate_cli.scene.turning.FramePairs`)."""
+
+    def __init__(self, most: int = MOST_KEPT) -> None:
+        self._most = most
+        self._stride = 1
+        self._kept: list[tuple[int, float, np.ndarray]] = []
+        self.width_px = 0
+
+    def clear(self) -> None:
+        self._kept.clear()
+        self._stride = 1
+
+    @property
+    def frames(self) -> list[tuple[int, float, np.ndarray]]:
+        """``(index, time_s, grey image)`` per frame kept, in order."""
+        return list(self._kept)
+
+    def tap(self, frames: Iterator[Frame]) -> Iterator[Frame]:
+        """Yield ``frames`` unchanged, keeping some (see the class)."""
+        for frame in frames:
+            if frame.index % self._stride < 2:
+                self.width_px = frame.image.shape[1]
+                self._kept.append((frame.index, frame.time_s, _reduced(frame.image)))
+                while len(self._kept) > self._most:  # (a spacing of 2 keeps every frame: 1, 4, 8 ...)
+                    self._stride = max(4, self._stride * 2)
+                    self._kept = [kept for kept in self._kept if kept[0] % self._stride < 2]
+            yield frame
+
+
+def _reduced(image: np.ndarray) -> np.ndarray:
+    if image.ndim == 3:
+        image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+    scale = SIDE_PX / max(image.shape[:2])
+    if scale < 1:
+        image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    return np.asarray(image, dtype=np.uint8)
+
+
+@dataclass(frozen=True)
+class _Change:
+    """A change of the picture: between frames ``index`` and ``index + 1``, at their mid-time."""
+
+    index: int
+    time_s: float
+    first: np.ndarray
+    second: np.ndarray
+
+
+def _changes(kept: list[tuple[int, float, np.ndarray]]) -> list[_Change]:
+    found = []
+    for (index, time_s, image), (next_index, next_s, next_image) in zip(kept, kept[1:], strict=False):
+        if next_index == index + 1 and next_s > time_s:
+            found.append(_Change(index, 0.5 * (time_s + next_s), _smoothed(image), _smoothed(next_image)))
+    if len(found) > MOST_CHANGES:
+        chosen = np.unique(np.linspace(0, len(found) - 1, MOST_CHANGES).round().astype(int))
+        found = [found[i] for i in chosen]
+    return found
+
+
+def _smoothed(image: np.ndarray) -> np.ndarray:
+    return cv2.GaussianBlur(image.astype(np.float32), (0, 0), 1.0)
+
+
+def _apart(a: _Change, b: _Change) -> bool:
+    """True when the two changes share no frame (a shared frame correlates them at no shift)."""
+    return abs(a.index - b.index) >= 2
+
+
+def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, width_px: int,
+                  search_tilt: bool, search_centre: bool = False) -> PictureAngle | None:
+    """The picture's turning angle and rate (see the module's notes) from the frames ``kept``
+    (:class:`AngleFrames`), through the view found from ``start`` (the picture's own pixels,
+    ``width_px`` wide; ``search_tilt``: where nothing tells the plane's tilt; ``search_centre``:
+    where the axis's point is a guess); None where too
+    little of the picture turns, or its changes do not line up."""
+    changes = _changes(kept)
+    if len(changes) < MIN_CHANGES or not all(math.isfinite(v) for v in start.centre_px):
+        return None
+    scale = changes[0].first.shape[1] / width_px
+    pairs = [(change.first, change.second) for change in changes]
+    view, _ = fitted_view(pairs, start.scaled(scale), step_px=0.04 * changes[0].first.shape[1], search_tilt=search_tilt,
+                          search_centre=search_centre)
+    if view.tilt_deg > MOST_TILT_DEG or view.focal_px < SHORTEST_FOCAL * changes[0].first.shape[1]:
+        return None  # a plane edge on (a side view: its picture does not turn), or no lens a camera has
+    chain = _chain(changes, view, ANGLES, RINGS)
+    if chain is None:
+        return None
+    times, angles, scores, alike, first_step = chain
+    turned = float(abs(angles[-1] - angles[0]))
+    score = float(np.median(scores))
+    if turned < MIN_TURNED_DEG or score < MIN_SCORE:
+        return None
+    rate, scatter = _long_rate(changes, view, times, angles, ANGLES, RINGS)
+    if not math.isfinite(rate):
+        return None
+    spread = _view_spread(changes, view, times, angles)
+    half = 1.96 * scatter + spread
+    omega = math.radians(abs(rate))
+    if not half < LOOSEST * abs(rate):
+        return None  # a rate the picture does not hold to within half itself tells nothing
+    return PictureAngle(omega, max(0.0, omega - math.radians(half)), omega + math.radians(half), 1 if rate > 0 else -1,
+                        times, angles, turned, score, view.scaled(1.0 / scale), alike, first_step)
+
+
+def _unrolled_changes(changes: list[_Change], view: DiscView, angles: int, rings: int) -> tuple[list[np.ndarray],
+                                                                                                  np.ndarray]:
+    maps = unrolled(changes[0].first.shape, view, angles, rings)
+    unrolled_changes = [maps.of(change.second) - maps.of(change.first) for change in changes]
+    return unrolled_changes, moving_weight(unrolled_changes, maps.inside)
+
+
+def _chain(changes: list[_Change], view: DiscView, angles: int, rings: int) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray, float | None, float] | None:
+    """The angle at each change, chained from nearby ones (the latest key change sharing no frame);
+    the peaks' heights; the first step's alternative shift (see :class:`PictureAngle`)."""
+    unrolled_changes, weight = _unrolled_changes(changes, view, angles, rings)
+    if weight.sum() < 50:
+        return None
+    measured: dict[int, float] = {0: 0.0}
+    heights: dict[int, float] = {0: 1.0}
+    keys = [0]
+    rate = None  # degrees a second, from the latest angles
+    alike, first_step = None, 0.0
+    for k in range(1, len(changes)):
+        usable = [key for key in keys if _apart(changes[key], changes[k])]
+        if not usable:
+            continue
+        key = usable[-1]
+        correlation = ring_correlation(unrolled_changes[key], unrolled_changes[k], weight)
+        if rate is None:
+            shift, height = shift_deg(correlation)
+            first_step = shift
+            other = second_peak(correlation, shift, max(5.0, 0.5 * abs(shift)))
+            if other >= ALIKE_PEAK * height:
+                alike = _other_shift(correlation, shift, max(5.0, 0.5 * abs(shift)))
+        else:
+            predicted = rate * (changes[k].time_s - changes[key].time_s)
+            shift, height = shift_deg(correlation, predicted, PREDICTED_WITHIN_DEG + PREDICTED_SHARE * abs(predicted))
+            if len(heights) > 3 and height < WEAK_PEAK * float(np.median(list(heights.values())[1:])):
+                continue  # a change that does not line up (a hand across the picture): left out
+        measured[k] = measured[key] + shift
+        heights[k] = height
+        rate = _recent_rate([(changes[i].time_s, measured[i]) for i in sorted(measured)[-RECENT:]])
+        if abs(measured[k] - measured[key]) > KEY_DEG:
+            keys.append(k)
+    order = sorted(measured)
+    if len(order) < MIN_CHANGES:
+        return None
+    return (np.array([changes[i].time_s for i in order]), np.array([measured[i] for i in order]),
+            np.array([heights[i] for i in order[1:]]), alike, first_step)
+
+
+def _recent_rate(points: list[tuple[float, float]]) -> float | None:
+    """The median of the slopes between the recent angles (degrees a second): one that went astray
+    does not lead the next astray."""
+    slopes = [(b - a) / (tb - ta) for i, (ta, a) in enumerate(points) for tb, b in points[i + 1:] if tb > ta]
+    return float(np.median(slopes)) if slopes else None
+
+
+def _other_shift(correlation: np.ndarray, best_deg: float, apart_deg: float) -> float:
+    count = len(correlation)
+    shifts = (np.arange(count) * (360.0 / count) + 180.0) % 360.0 - 180.0
+    off = np.abs((shifts - best_deg + 180.0) % 360.0 - 180.0)
+    return float(shifts[int(np.argmax(np.where(off > apart_deg, correlation, -np.inf)))])
+
+
+def _long_rate(changes: list[_Change], view: DiscView, times: np.ndarray, angles_deg: np.ndarray, angles: int,
+               rings: int) -> tuple[float, float]:
+    """The rate (degrees a second, signed) fitted with an offset to the shifts between changes far
+    apart (the farthest within :data:`FARTHEST_DEG`, and one half way), sought near the chained
+    angles; and its standard error, widened for changes used in several pairs."""
+    unrolled_changes, weight = _unrolled_changes(changes, view, angles, rings)
+    index_of = {changes[i].time_s: i for i in range(len(changes))}
+    chained = [(index_of[t], float(a)) for t, a in zip(times, angles_deg, strict=True)]
+    rows = []
+    for position, (i, angle_i) in enumerate(chained):
+        far = [(k, angle_k) for k, angle_k in chained[position + 1:]
+               if _apart(changes[i], changes[k]) and abs(angle_k - angle_i) <= FARTHEST_DEG]
+        for k, angle_k in {far[-1], far[len(far) // 2]} if far else ():
+            correlation = ring_correlation(unrolled_changes[i], unrolled_changes[k], weight)
+            shift, _ = shift_deg(correlation, angle_k - angle_i, 15.0)
+            rows.append((changes[k].time_s - changes[i].time_s, shift))
+    if len(rows) < 3:
+        return math.nan, math.nan
+    table = np.array(rows)
+    spans = table[:, 0]
+    design = np.vstack([spans, np.ones(len(rows))]).T
+    coefficients = np.linalg.lstsq(design, table[:, 1], rcond=None)[0]
+    slope = float(coefficients[0])
+    residuals = table[:, 1] - design @ coefficients
+    spread = float(np.sum((spans - spans.mean()) ** 2))
+    if spread <= 0:
+        return math.nan, math.nan
+    error = math.sqrt(float(np.sum(residuals ** 2)) / max(1, len(rows) - 2) / spread)
+    return slope, error * math.sqrt(len(rows) / len(chained))
+
+
+def _view_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angles_deg: np.ndarray) -> float:
+    """How far the rate moves (degrees a second) when the view is varied within what part of a
+    turn tells of it: the lens halved and doubled, the tilt by :data:`TILT_VARIED_DEG` (either
+    way, or about two directions where the plane faces the camera), the axis's point by
+    :data:`CENTRE_VARIED` of the picture's width either way (measured coarsely, against the same
+    measure through the view found)."""
+    coarse = (360, 100)
+    base, _ = _long_rate(changes, view, times, angles_deg, *coarse)
+    step = CENTRE_VARIED * changes[0].first.shape[1]
+    x, y = view.centre_px
+    varied = [replace(view, focal_px=view.focal_px * 0.5), replace(view, focal_px=view.focal_px * 2.0),
+              replace(view, centre_px=(x + step, y)), replace(view, centre_px=(x - step, y)),
+              replace(view, centre_px=(x, y + step)), replace(view, centre_px=(x, y - step))]
+    if view.tilt_deg > TILT_VARIED_DEG:
+        varied += [replace(view, tilt_deg=view.tilt_deg - TILT_VARIED_DEG),
+                   replace(view, tilt_deg=min(85.0, view.tilt_deg + TILT_VARIED_DEG))]
+    else:
+        varied += [replace(view, tilt_deg=view.tilt_deg + TILT_VARIED_DEG),
+                   replace(view, tilt_deg=view.tilt_deg + TILT_VARIED_DEG, long_axis_deg=view.long_axis_deg + 90.0)]
+    rates = [_long_rate(changes, other, times, angles_deg, *coarse)[0] for other in varied]
+    moved = [abs(rate - base) for rate in rates if math.isfinite(rate)]
+    return max(moved) if moved and math.isfinite(base) else 0.0

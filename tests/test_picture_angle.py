@@ -1,0 +1,109 @@
+"""The picture's own turning angle (rotrate_cli.scene.picture_angle): a textured disc turned by a
+known angle a frame, face on and tilted, part of a turn, against a still background with a
+still reflection on the disc; and how the verdict weighs it against the tracks."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from rotrate_cli.fitting.outliers import Combined
+from rotrate_cli.scene.disc import DiscView
+from rotrate_cli.scene.picture_angle import AngleFrames, PictureAngle, measure_angle
+from rotrate_cli.stages.verdict import judge
+from rotrate_cli.video.frames import Frame
+
+FPS = 30.0
+
+
+def _texture(size: int, seed: int = 3) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    noise = rng.random((size // 8, size // 8)).astype(np.float32)
+    return (cv2.resize(noise, (size, size), interpolation=cv2.INTER_CUBIC) * 200 + 20).clip(0, 255).astype(np.uint8)
+
+
+def _frames(deg_per_frame: float, count: int, tilt_deg: float = 0.0, size: int = 320) -> tuple[list[Frame],
+                                                                                                   tuple[float, float]]:
+    """A disc of texture turning ``deg_per_frame`` about its centre, squashed by ``cos(tilt)``
+    vertically (a long lens: the affine view), over a still textured background, with a still
+    bright patch on the disc (a reflection)."""
+    disc = _texture(size)
+    background = _texture(size, seed=9)
+    centre = (size * 0.5, size * 0.5)
+    yy, xx = np.mgrid[:size, :size]
+    inside = (xx - centre[0]) ** 2 + (yy - centre[1]) ** 2 < (0.42 * size) ** 2
+    squash = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(math.radians(tilt_deg)), 0.0]])
+    squash[1, 2] = centre[1] * (1 - squash[1, 1])
+    frames = []
+    for index in range(count):
+        turn = cv2.getRotationMatrix2D(centre, deg_per_frame * index, 1.0)
+        turned = np.where(inside, cv2.warpAffine(disc, turn, (size, size), flags=cv2.INTER_CUBIC), background)
+        seen = cv2.warpAffine(turned.astype(np.uint8), squash, (size, size), flags=cv2.INTER_LINEAR)
+        cv2.circle(seen, (int(size * 0.62), int(size * 0.45)), 12, 250, -1)  # a reflection: stays put
+        frames.append(Frame(index, index / FPS, cv2.cvtColor(seen, cv2.COLOR_GRAY2BGR)))
+    return frames, centre
+
+
+def _measured(frames: list[Frame], start: DiscView, search_tilt: bool) -> PictureAngle | None:
+    kept = AngleFrames()
+    for _ in kept.tap(iter(frames)):
+        pass
+    return measure_angle(kept.frames, start, kept.width_px, search_tilt=search_tilt)
+
+
+@pytest.mark.parametrize(("tilt_deg", "deg_per_frame"), [(0.0, 4.0), (0.0, -9.0), (55.0, 5.0)])
+def test_a_third_of_a_turn_reads_the_rate_within_half_a_percent(tilt_deg: float, deg_per_frame: float) -> None:
+    count = int(round(120 / abs(deg_per_frame))) + 2  # about a third of a turn
+    frames, centre = _frames(deg_per_frame, count, tilt_deg)
+    truth = math.radians(abs(deg_per_frame)) * FPS
+    # the centre given 4 px off, face on: the view is found from the picture
+    angle = _measured(frames, DiscView((centre[0] + 4, centre[1] - 3), 0.0, 0.0, 320.0), search_tilt=tilt_deg > 0)
+    assert angle is not None
+    assert abs(angle.omega_rad_s / truth - 1) < 0.005
+    assert angle.omega_low_rad_s <= truth <= angle.omega_high_rad_s
+    assert angle.turned_deg > 90
+
+
+def test_the_sense_follows_the_turn() -> None:
+    one, centre = _frames(5.0, 20)
+    other, _ = _frames(-5.0, 20)
+    start = DiscView(centre, 0.0, 0.0, 320.0)
+    assert _measured(one, start, False).sense == -_measured(other, start, False).sense
+
+
+def test_a_still_picture_tells_no_rate() -> None:
+    frames, centre = _frames(0.0, 20)
+    assert _measured(frames, DiscView(centre, 0.0, 0.0, 320.0), False) is None
+
+
+def _angle(omega: float, half: float = 0.01) -> PictureAngle:
+    return PictureAngle(omega, omega * (1 - half), omega * (1 + half), 1, np.zeros(8), np.zeros(8), 100.0, 0.9,
+                        DiscView((0.0, 0.0), 0.0, 0.0, 100.0))
+
+
+def test_the_verdict_reports_the_turning_and_notes_loose_tracks() -> None:
+    loose = Combined(0.44, 0.0, 0.88, 12)  # tracks that slide: far off, and loose
+    verdict = judge(loose, None, 12, angle=_angle(3.55))
+    assert verdict.rate_from == "turning"
+    assert verdict.quality == "good"
+    assert verdict.omega_rad_s == pytest.approx(3.55)
+    assert any("do not stand behind" in note for note in verdict.notes)
+
+
+def test_informative_tracks_that_disagree_make_it_weak_and_the_interval_holds_both() -> None:
+    tight = Combined(1.80, 1.75, 1.85, 20)
+    verdict = judge(tight, None, 20, angle=_angle(3.55))
+    assert verdict.quality == "weak"
+    assert verdict.rate_from == "tracks" and verdict.omega_rad_s == pytest.approx(1.80)
+    assert verdict.omega_low_rad_s <= 1.75 and verdict.omega_high_rad_s >= 3.55 * 1.01
+
+
+def test_a_first_step_that_fits_two_ways_is_weak_with_both_readings() -> None:
+    angle = PictureAngle(3.0, 2.97, 3.03, 1, np.zeros(8), np.zeros(8), 100.0, 0.9,
+                         DiscView((0.0, 0.0), 0.0, 0.0, 100.0), alike_deg=-25.0, first_step_deg=35.0)
+    verdict = judge(None, None, 0, angle=angle)
+    assert verdict.quality == "weak"
+    assert verdict.omega_high_rad_s >= 3.0 and verdict.omega_low_rad_s <= 3.0 * 25 / 35
