@@ -130,17 +130,18 @@ class AngleFrames:
         for frame in frames:
             if frame.index % self._stride < 2:
                 self.width_px = frame.image.shape[1]
-                self._kept.append((frame.index, frame.time_s, _reduced(frame.image)))
+                self._kept.append((frame.index, frame.time_s, reduced_grey(frame.image)))
                 while len(self._kept) > self._most:  # (a spacing of 2 keeps every frame: 1, 4, 8 ...)
                     self._stride = max(4, self._stride * 2)
                     self._kept = [kept for kept in self._kept if kept[0] % self._stride < 2]
             yield frame
 
 
-def _reduced(image: np.ndarray) -> np.ndarray:
+def reduced_grey(image: np.ndarray, side_px: int = SIDE_PX) -> np.ndarray:
+    """``image`` (grey or BGR) in grey, its longer side at most ``side_px``."""
     if image.ndim == 3:
         image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
-    scale = SIDE_PX / max(image.shape[:2])
+    scale = side_px / max(image.shape[:2])
     if scale < 1:
         image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
     return np.asarray(image, dtype=np.uint8)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from rotrate_cli.scene.picture_angle import AngleFrames
+from rotrate_cli.scene.picture_angle import AngleFrames, reduced_grey
 from rotrate_cli.video.frames import Frame
 
 #: Pairs of consecutive frames kept over the clip (evenly spread), and their longer side, pixels.
@@ -89,23 +89,15 @@ class FramePairs:
         for frame in self.angle_frames.tap(frames):
             index = frame.index
             if self._held is not None and index == self._held[0] + 1:
-                self._pairs.append((self._held[1], self._held[2], frame.time_s, _reduced(frame.image)))
+                second = reduced_grey(frame.image, PAIR_SIDE_PX)
+                self._pairs.append((self._held[1], self._held[2], frame.time_s, second))
                 self._held = None
                 if len(self._pairs) > 2 * self._most:  # a long clip: every second pair kept
                     self._stride *= 2
                     self._pairs = self._pairs[::2]
             if index % self._stride == 0:
-                self._held = (index, frame.time_s, _reduced(frame.image))
+                self._held = (index, frame.time_s, reduced_grey(frame.image, PAIR_SIDE_PX))
             yield frame
-
-
-def _reduced(image: np.ndarray) -> np.ndarray:
-    if image.ndim == 3:
-        image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
-    scale = PAIR_SIDE_PX / max(image.shape[:2])
-    if scale < 1:
-        image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
-    return np.asarray(image, dtype=np.uint8)
 
 
 def _moving(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
