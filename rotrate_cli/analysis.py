@@ -46,7 +46,7 @@ from rotrate_cli.stages.fits import (
 )
 from rotrate_cli.stages.geometry import Geometry, locate, measure
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
-from rotrate_cli.stages.tracks import Footage, ProgressCallback, read_footage
+from rotrate_cli.stages.tracks import Footage, NothingTracked, ProgressCallback, read_footage
 from rotrate_cli.stages.verdict import Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
 from rotrate_cli.stages.windows import judged_series
@@ -200,7 +200,16 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
 
 def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None,
              stage: StageCallback | None) -> Analysis:
-    footage = read_footage(source, config, progress)
+    try:
+        footage = read_footage(source, config, progress)
+    except NothingTracked as error:
+        # no point followed (a blurred disc, thin spokes): the picture's own turning may still tell
+        if config.method != "fit" or config.points_px or config.segment:
+            raise
+        try:
+            return _repetition_only(error.footage, None, config, None, None)
+        except NoResultError:
+            raise error from None
     if stage is not None:
         stage("fitting the tracks")
     if config.window_s is not None and config.window_s > footage.duration_s:
@@ -272,15 +281,17 @@ def _picture_turning(footage: Footage, geometry: Geometry, view_tracks: pd.DataF
 def _picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFrame | None,
                    tracks: Combined | None) -> PictureAngle | None:
     """The picture's own turning angle (:mod:`rotrate_cli.scene.picture_angle`), where the picture
-    can turn: not in a side view. Its plane's view is sought from the tracks' paths' (their
-    centre and ellipse, at the tracks' rate) where they tell one, else from the fixation, every
-    tilt tried."""
-    if view_tracks is None or len(view_tracks) == 0:
-        return None
+    can turn: not in a side view as the tracks' paths tell it (where they tell no view, the
+    picture's own changes decide: an edge-on plane is no measurement). Its plane's view is sought
+    from the tracks' paths' (their centre and ellipse, at the tracks' rate) where they tell one,
+    else from the fixation, every tilt tried."""
     rate = tracks.omega_rad_s if tracks is not None and 0 < tracks.omega_rad_s < math.inf else math.nan
-    view = view_from_paths(view_tracks, rate) if math.isfinite(rate) else None
-    if not not_side_view(view, view_tracks):
-        return None  # seen from the side the picture does not turn
+    view = None
+    if view_tracks is not None and len(view_tracks) > 0:
+        view = view_from_paths(view_tracks, rate) if math.isfinite(rate) else None
+        if view is not None and not not_side_view(view, view_tracks):
+            return None  # seen from the side (as the paths tell) the picture does not turn
+    # (no track at all tells no view: the picture's own changes are the only evidence)
     width = footage.info.width_px
     kept = footage.pairs.angle_frames.frames
     if view is not None:
@@ -381,7 +392,7 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
 
 
 def _repetition_only(footage: Footage, period: Period | None, config: AnalysisConfig, kept: pd.DataFrame | None,
-                     view_tracks: pd.DataFrame, result: RateResult | None = None,
+                     view_tracks: pd.DataFrame | None, result: RateResult | None = None,
                      geometry: Geometry | None = None) -> Analysis:
     """The Analysis when no track gave a rate but the clip repeats: the rate is the repetition's,
     the sense of turning unknown, and the fixation the one given (else found from the paths'

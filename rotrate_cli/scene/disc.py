@@ -28,6 +28,8 @@ SEARCH_RINGS = 100
 #: Rings whose picture changes less than this from frame to frame (grey levels, on average)
 #: carry nothing.
 MOVING_LEVELS = 1.0
+#: Starts refined besides the best about the given centre (apart from it and each other).
+REFINED_STARTS = 2
 #: The longest focal length tried, in picture widths (beyond, the view is affine).
 LONGEST_FOCAL = 20.0
 
@@ -192,9 +194,12 @@ def second_peak(correlation: np.ndarray, best_deg: float, apart_deg: float) -> f
 
 def view_score(pairs: list[tuple[np.ndarray, np.ndarray]], view: DiscView, lags: tuple[int, ...],
                per_lag: int = 3) -> float:
-    """How well the changes of the picture (``pairs`` of consecutive frames, grey float32, in time
-    order) line up when shifted along the angle through ``view``: the mean peak correlation of a
-    few changes ``lags`` apart in the list."""
+    """How much of the picture's change (``pairs`` of consecutive frames, grey float32, in time
+    order) lines up when shifted along the angle through ``view``: for a few changes ``lags``
+    apart in the list, the best covariance over the shifts, each sample weighted by the area of the
+    picture it stands for, over the two changes' energy in the whole picture (at most about 1). A
+    view that lines up a small part of the picture well scores little: normalised over the rings
+    it unrolled alone, a corner of the wheel's picture scored above the wheel."""
     count = len(pairs)
     starts = {lag: list(range(0, count - lag, max(1, (count - lag) // per_lag)))[:per_lag] for lag in lags
               if count - lag > 0}
@@ -202,24 +207,52 @@ def view_score(pairs: list[tuple[np.ndarray, np.ndarray]], view: DiscView, lags:
     if not wanted:
         return -1.0
     maps = unrolled(pairs[0][0].shape, view, SEARCH_ANGLES, SEARCH_RINGS)
+    area = _sample_area(maps)
     changes = {i: maps.of(pairs[i][1]) - maps.of(pairs[i][0]) for i in wanted}
+    energy = {i: float(np.sum((pairs[i][1] - pairs[i][0]) ** 2)) for i in wanted}
     weight = moving_weight(list(changes.values()), maps.inside)
     if weight.sum() < 50:
         return -1.0
-    peaks = [ring_correlation(changes[s], changes[s + lag], weight, upsample=4).max()
-             for lag, firsts in starts.items() for s in firsts]
-    return float(np.mean(peaks))
+    frequency = np.arange(SEARCH_ANGLES // 2 + 1)
+    smooth = np.exp(-0.5 * (frequency / (SEARCH_ANGLES / 12.0)) ** 2)
+    scores = []
+    for lag, firsts in starts.items():
+        for first in firsts:
+            a = _ringless(changes[first], weight) * area
+            b = _ringless(changes[first + lag], weight)
+            covariance = np.fft.irfft(_cross(a, b) * smooth, n=SEARCH_ANGLES * 4) * 4
+            scores.append(float(covariance.max()) / max(math.sqrt(energy[first] * energy[first + lag]), 1e-9))
+    return float(np.mean(scores))
 
 
-def fitted_view(pairs: list[tuple[np.ndarray, np.ndarray]], start: DiscView, step_px: float, search_tilt: bool,
-                search_centre: bool = False, budget: int = 160) -> tuple[DiscView, float]:
-    """The view that lines the changes of the picture up best (:func:`view_score`), sought from
-    ``start`` (moving its centre by about ``step_px``), and its score. ``search_tilt``: try
-    several tilts and directions first (where the tracks tell no view); ``search_centre``: and
-    centres over the whole picture (where the axis was found, not given: a found axis can lie far
-    from a disc's, the record close-up's 600 px)."""
-    from scipy.optimize import minimize  # a well-kept simplex search; imported where used (start-up)
+def _sample_area(maps: Unrolled) -> np.ndarray:
+    """The picture's area (pixels) each sample of the unrolled picture stands for: the cross
+    product of its steps along the angle and along the radius; 0 outside the picture."""
+    x, y = maps.map_x.astype(np.float64), maps.map_y.astype(np.float64)
+    along_x, along_y = np.gradient(x, axis=0), np.gradient(y, axis=0)
+    out_x, out_y = np.gradient(x, axis=1), np.gradient(y, axis=1)
+    area = np.abs(along_x * out_y - along_y * out_x)
+    return np.where(maps.inside, np.minimum(area, 16.0), 0.0)
 
+
+@dataclass(frozen=True)
+class Candidate:
+    """A view found, its score (:func:`view_score`), and whether it was sought about the axis's
+    point given or found from the tracks (independent evidence of where the axis is)."""
+
+    view: DiscView
+    score: float
+    about_given: bool
+
+
+def fitted_views(pairs: list[tuple[np.ndarray, np.ndarray]], start: DiscView, step_px: float, search_tilt: bool,
+                 search_centre: bool = False, budget: int = 160) -> list[Candidate]:
+    """The views that line the changes of the picture up best (:func:`view_score`), sought from
+    ``start`` (moving its centre by about ``step_px``): the best about the given centre, tilted
+    freely and face on, and where ``search_centre``, the best few elsewhere (apart from each
+    other); each refined, best first. ``search_tilt``: try several tilts and directions first
+    (where the tracks tell no view); ``search_centre``: centres over the whole picture (where the
+    axis was found, not given: a found axis can lie far from a disc's, the record close-up's 600 px)."""
     count = len(pairs)
     lags = tuple(sorted({lag for lag in (1, max(2, count // 4), max(2, count // 2)) if lag < count})) or (1,)
     width = pairs[0][0].shape[1]
@@ -233,15 +266,45 @@ def fitted_view(pairs: list[tuple[np.ndarray, np.ndarray]], start: DiscView, ste
                    for x in np.linspace(0.1, 0.9, 5) * width for y in np.linspace(0.1, 0.9, 3) * height
                    for tilt, phi in ((0.0, 0.0), (55.0, 0.0), (55.0, 60.0), (55.0, 120.0))]
     scored = [(view_score(pairs, view, lags), view) for view in starts]
-    best_score, best = max(scored, key=lambda pair: pair[0])
+    near = max((pair for pair in scored if pair[1].centre_px == start.centre_px), key=lambda pair: pair[0])
+    found = [Candidate(*_refined(pairs, near[1], near[0], step_px, lags, budget), True)]
+    if search_tilt:  # the plane face on about the given centre: its centre alone sought
+        face_on = replace(start, tilt_deg=0.0, long_axis_deg=0.0)
+        found.append(Candidate(*_refined(pairs, face_on, view_score(pairs, face_on, lags), step_px, lags, budget,
+                                         face_on=True), True))
+    if search_centre:
+        # a start that scores best coarsely is not always the one that refines best
+        chosen: list[tuple[float, DiscView]] = []
+        for score, view in sorted(scored, key=lambda pair: -pair[0]):
+            if len(chosen) >= REFINED_STARTS:
+                break
+            if all(math.dist(view.centre_px, other.centre_px) > 0.1 * width
+                   for other in [near[1]] + [v for _, v in chosen]):
+                chosen.append((score, view))
+        found += [Candidate(*_refined(pairs, view, score, step_px, lags, budget), False) for score, view in chosen]
+    return sorted(found, key=lambda candidate: -candidate.score)
+
+
+def _refined(pairs: list[tuple[np.ndarray, np.ndarray]], best: DiscView, best_score: float, step_px: float,
+             lags: tuple[int, ...], budget: int, face_on: bool = False) -> tuple[DiscView, float]:
+    """``best`` refined by a simplex search over its centre, direction, tilt and lens (its centre
+    alone, ``face_on``)."""
+    from scipy.optimize import minimize  # a well-kept simplex search; imported where used (start-up)
+
+    width = pairs[0][0].shape[1]
 
     def unpack(x: np.ndarray) -> DiscView:
+        if face_on:
+            return replace(best, centre_px=(float(x[0]), float(x[1])))
         focal = width * min(math.exp(x[4]), LONGEST_FOCAL)
         return DiscView((float(x[0]), float(x[1])), float(x[2]), float(np.clip(x[3], 0.0, 85.0)), focal)
 
     x0 = np.array([best.centre_px[0], best.centre_px[1], best.long_axis_deg, best.tilt_deg,
                    math.log(min(best.focal_px / width, LONGEST_FOCAL))])
-    simplex = [x0] + [x0 + np.eye(5)[i] * size for i, size in enumerate((step_px, step_px, 10.0, 10.0, 0.5))]
+    steps = (step_px, step_px, 10.0, 10.0, 0.5)
+    if face_on:
+        x0, steps = x0[:2], steps[:2]
+    simplex = [x0] + [x0 + np.eye(len(x0))[i] * size for i, size in enumerate(steps)]
     found = minimize(lambda x: -view_score(pairs, unpack(x), lags), x0, method="Nelder-Mead",
                      options={"initial_simplex": simplex, "xatol": 0.3, "fatol": 5e-4, "maxfev": budget})
     if -found.fun > best_score:

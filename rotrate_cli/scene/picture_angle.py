@@ -29,7 +29,7 @@ import numpy as np
 
 from rotrate_cli.scene.disc import (
     DiscView,
-    fitted_view,
+    fitted_views,
     moving_weight,
     ring_correlation,
     second_peak,
@@ -71,6 +71,11 @@ MOST_TILT_DEG = 80.0
 SHORTEST_FOCAL = 0.3
 #: A rate whose interval's half is wider than this fraction of it is no measurement.
 LOOSEST = 0.5
+#: Views that line the picture up this nearly as well as the best (their scores' ratio) are as
+#: likely: the interval holds their readings.
+NEARLY_AS_WELL = 0.8
+#: A view sought away from the tracks' axis is taken when it scores this many times the best about it.
+CLEARLY_BETTER = 1.25
 #: Another shift that fits nearly as well (this fraction of the best) leaves the turn open.
 ALIKE_PEAK = 0.9
 
@@ -189,8 +194,32 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
         return None
     scale = changes[0].first.shape[1] / width_px
     pairs = [(change.first, change.second) for change in changes]
-    view, _ = fitted_view(pairs, start.scaled(scale), step_px=0.04 * changes[0].first.shape[1], search_tilt=search_tilt,
-                          search_centre=search_centre)
+    views = fitted_views(pairs, start.scaled(scale), step_px=0.04 * changes[0].first.shape[1],
+                         search_tilt=search_tilt, search_centre=search_centre)
+    measured = [(candidate, angle) for candidate in views if (angle := _through(changes, candidate.view)) is not None]
+    if not measured:
+        return None
+    # the view about the axis the tracks tell (given, or found from them: evidence the picture's
+    # changes do not have), unless another lines the picture up clearly better (the record's
+    # found axis lay 600 px from its spindle); the best view's reading otherwise
+    about = [pair for pair in measured if pair[0].about_given]
+    elsewhere = [pair for pair in measured if not pair[0].about_given]
+    best = max(about or elsewhere, key=lambda pair: pair[0].score)
+    if elsewhere and about:
+        other = max(elsewhere, key=lambda pair: pair[0].score)
+        best = other if other[0].score >= CLEARLY_BETTER * best[0].score else best
+    chosen = best[1]
+    low, high = chosen.omega_low_rad_s, chosen.omega_high_rad_s
+    # another view that lines the picture up nearly as well is as likely: the interval holds its
+    # reading too (the record's first 0.3 turn: the best view read -8.5%, the next +0.1%)
+    for candidate, angle in measured:
+        if candidate.score >= NEARLY_AS_WELL * best[0].score:
+            low, high = min(low, angle.omega_low_rad_s), max(high, angle.omega_high_rad_s)
+    return replace(chosen, omega_low_rad_s=low, omega_high_rad_s=high, view=chosen.view.scaled(1.0 / scale))
+
+
+def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
+    """The angle and rate through ``view`` (the reduced frames' pixels); None where it tells none."""
     if view.tilt_deg > MOST_TILT_DEG or view.focal_px < SHORTEST_FOCAL * changes[0].first.shape[1]:
         return None  # a plane edge on (a side view: its picture does not turn), or no lens a camera has
     chain = _chain(changes, view, ANGLES, RINGS)
@@ -206,11 +235,11 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
         return None
     spread = _view_spread(changes, view, times, angles)
     half = 1.96 * scatter + spread
-    omega = math.radians(abs(rate))
     if not half < LOOSEST * abs(rate):
         return None  # a rate the picture does not hold to within half itself tells nothing
+    omega = math.radians(abs(rate))
     return PictureAngle(omega, max(0.0, omega - math.radians(half)), omega + math.radians(half), 1 if rate > 0 else -1,
-                        times, angles, turned, score, view.scaled(1.0 / scale), alike, first_step)
+                        times, angles, turned, score, view, alike, first_step)
 
 
 def _unrolled_changes(changes: list[_Change], view: DiscView, angles: int, rings: int) -> tuple[list[np.ndarray],

@@ -94,12 +94,21 @@ class Footage:
     camera: CameraPath | None = None
 
 
+class NothingTracked(NoResultError):
+    """Nothing could be tracked; ``footage`` holds what decoding kept all the same (its tracks
+    empty), for a measurement that needs no track (the picture's own turning)."""
+
+    def __init__(self, message: str, footage: Footage) -> None:
+        super().__init__(message)
+        self.footage = footage
+
+
 def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressCallback | None = None) -> Footage:
     """Decode and track ``source`` between ``config.start_s`` and ``config.end_s``.
 
     Raises:
         InputError: the source cannot be read, has too few frames, or an option does not fit it.
-        NoResultError: nothing could be tracked.
+        NothingTracked: nothing could be tracked.
     """
     video = FrameSource(source, fps=config.fps,
                         times_s=None if config.times_s is None else np.asarray(config.times_s, dtype=np.float64))
@@ -121,7 +130,12 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         # OpenCV's trouble with interlaced streams: black frames, or one frozen garbled picture;
         # it strikes some openings of a file and not others, so it is caught here too
         run = _track(video, config, tracker, progress, thumbnails, keyframes, pairs)
-    _check_tracked(run, thumbnails, source)
+    try:
+        _check_tracked(run, thumbnails, source)
+    except NoResultError as error:
+        raise NothingTracked(str(error), Footage(info, run.tracks, thumbnails, keyframes, pairs, run.frames,
+                                                 run.last_time_s - run.first_time_s, math.nan,
+                                                 tuple(warnings))) from None
     shot = None if config.points_px else longest_shot(thumbnails.times_s, thumbnails.images, thumbnails.levels)
     if shot is not None:
         # the clip cuts: tracks do not cross a cut, and the repetition is another scene's too
