@@ -12,7 +12,7 @@ from __future__ import annotations
 import glob
 import math
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -26,7 +26,7 @@ VIDEO_SUFFIXES = frozenset({".mp4", ".mov", ".avi", ".mkv", ".m4v", ".webm", ".m
 SUMMARY_COLUMNS = ("file", "status", "omega", "omega_low", "omega_high", "rpm", "direction", "tracks_used",
                    "quality", "error")
 #: Outcome statuses and the exit code each stands for (a batch exits with the largest).
-STATUS_CODES = {"ok": 0, "weak": 1, "off_target": 1, "no_result": 1, "bad_input": 2, "failed": 3}
+STATUS_CODES = {"ok": 0, "skipped": 0, "weak": 1, "off_target": 1, "no_result": 1, "bad_input": 2, "failed": 3}
 
 
 @dataclass(frozen=True)
@@ -35,7 +35,8 @@ class Outcome:
 
     Attributes:
         source: the input as expanded.
-        status: ``ok``, ``weak`` (weak evidence, with ``--strict``), ``off_target`` (outside
+        status: ``ok``, ``skipped`` (its report was there already: a batch resumed), ``weak``
+            (weak evidence, with ``--strict``), ``off_target`` (outside
             ``--expect``'s band), ``no_result`` (read, but
             no trustworthy rate), ``bad_input`` or ``failed`` (an unexpected error).
         analysis: the analysis when there was one (``ok`` and ``off_target``), else None.
@@ -146,7 +147,8 @@ def run_batch(
 ) -> list[Outcome]:
     """Run ``jobs`` and return their outcomes in the order of ``jobs``: here, in ``workers``
     processes when more than 1, or on the Dask cluster whose scheduler is at ``scheduler``
-    (the ``dask`` extra). ``done`` is called as each finishes (in order).
+    (the ``dask`` extra). ``done`` is called as each finishes (in the order they finish, in
+    processes; in the order given, on Dask).
 
     Raises:
         InputError: ``workers`` below 1, Dask not installed, or the scheduler unreachable.
@@ -162,12 +164,14 @@ def run_batch(
             if done is not None:
                 done(outcomes[-1])
         return outcomes
+    finished: dict[int, Outcome] = {}
     with ProcessPoolExecutor(max_workers=min(workers, len(jobs), available_cores())) as pool:
-        for outcome in pool.map(run_one, jobs):
-            outcomes.append(outcome)
+        futures = {pool.submit(run_one, job): index for index, job in enumerate(jobs)}
+        for future in as_completed(futures):  # ``done`` as each finishes: its report is kept at once
+            finished[futures[future]] = future.result()
             if done is not None:
-                done(outcome)
-    return outcomes
+                done(finished[futures[future]])
+    return [finished[index] for index in range(len(jobs))]
 
 
 def _run_on_dask(jobs: Sequence[Job], scheduler: str, done: Callable[[Outcome], None] | None) -> list[Outcome]:
@@ -182,11 +186,18 @@ def _run_on_dask(jobs: Sequence[Job], scheduler: str, done: Callable[[Outcome], 
     except (OSError, TimeoutError, ValueError) as exc:
         raise InputError(f"could not reach the Dask scheduler at {scheduler} ({type(exc).__name__}); "
                          "check the address (tcp://HOST:8786)") from None
+    # paths as this machine resolves them: a worker started elsewhere has another working folder
+    sent = [replace(job, source=str(Path(job.source).resolve())) if Path(job.source).exists() else job for job in jobs]
     try:
-        futures = client.map(run_one, list(jobs), pure=False)
+        futures = client.map(run_one, sent, pure=False)
         outcomes = []
-        for future in futures:  # in the order given, whatever order they finish in
-            outcomes.append(future.result())
+        for job, future in zip(jobs, futures, strict=True):  # in the order given, whatever order they finish in
+            outcome = replace(future.result(), source=job.source)
+            if outcome.status == "bad_input" and Path(job.source).exists() and "no such file" in outcome.error:
+                outcome = replace(outcome, error=f"the Dask worker cannot see {Path(job.source).resolve()}, which "
+                                                 "this machine has: the cluster's workers need the inputs at the "
+                                                 "same paths (a shared folder)")
+            outcomes.append(outcome)
             if done is not None:
                 done(outcomes[-1])
         return outcomes

@@ -272,3 +272,48 @@ def test_output_dir_takes_one_input_too(tmp_path: Path) -> None:
     code, stdout, _ = _batch(str(CLIPS[0]), "--fixation", "auto", "--output-dir", str(tmp_path))
     assert code == 0 and (tmp_path / f"{CLIPS[0].stem}.json").is_file()
     assert CLIPS[0].name in stdout
+
+
+def test_an_interrupted_batch_keeps_the_reports_of_the_inputs_done(tmp_path: Path,
+                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each report is written as its input finishes, with a progress line: an interrupt at the
+    second input leaves the first's report (before, every report waited for the batch's end)."""
+    import rotrate_cli.batch as batch
+
+    real = batch.run_one
+    calls = []
+
+    def interrupted(job: batch.Job) -> batch.Outcome:
+        calls.append(job.source)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(job)
+
+    monkeypatch.setattr(batch, "run_one", interrupted)
+    code, _, stderr = _batch(*map(str, CLIPS), "--fixation", "auto", "--output-dir", str(tmp_path))
+    assert code != 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"{CLIPS[0].stem}.json"]
+    assert f"[1/3] {CLIPS[0]}: " in stderr and "rad/s, good" in stderr
+
+
+def test_resume_skips_the_inputs_whose_reports_are_there(tmp_path: Path) -> None:
+    """Run again with --resume: the inputs with a report are skipped (and said so); the others run."""
+    first = tmp_path / f"{CLIPS[0].stem}.csv"
+    first.write_text("kept\n")
+    code, stdout, stderr = _batch(*map(str, CLIPS[:2]), "--fixation", "auto", "--output-dir", str(tmp_path),
+                                  "--resume", "--format", "csv")
+    assert code == 0
+    assert first.read_text() == "kept\n"  # nothing the user has is overwritten
+    assert (tmp_path / f"{CLIPS[1].stem}.csv").is_file()
+    table = pd.read_csv(io.StringIO(stdout))
+    assert table["status"].tolist() == ["skipped", "ok"]
+    assert "[2/2]" in stderr
+    # without --resume an existing report stops the batch before any work
+    code, _, stderr = _batch(*map(str, CLIPS[:2]), "--fixation", "auto", "--output-dir", str(tmp_path),
+                             "--format", "csv")
+    assert code == 2 and "exists" in stderr
+
+
+def test_resume_needs_an_output_dir() -> None:
+    code, _, stderr = _batch(str(CLIPS[0]), "--fixation", "auto", "--resume")
+    assert code == 2 and "--output-dir" in stderr

@@ -128,13 +128,16 @@ def test_the_wheel_after_its_calibration_still() -> None:
     assert any("cuts once" in warning for warning in analysis.warnings)
 
 
-def test_the_wheel_under_a_turn_is_weak_and_its_interval_holds_the_truth() -> None:
-    """Its first 2.5 s, under a turn: one track of 24 is kept, on the hands that hold the axle."""
+def test_the_wheel_under_a_turn_is_read_from_the_pictures_turning() -> None:
+    """Its first 2.5 s, under a turn (its first frame still), the axis found: one track of 24 was
+    kept, on the hands that hold the axle, and the result was weak. The picture's own turning
+    (issue 49) reads it within 2% (the truth is good to about 1%), its interval holding the truth."""
     clip = VIDEOS / "bicycle_wheel_frontal.mp4"
     need(clip, "the bicycle wheel video")
     truth = json.loads(clip.with_suffix(".truth.json").read_text())
     analysis = analyze(clip, AnalysisConfig(fixation_px=None, end_s=2.5))
-    assert analysis.quality == "weak"
+    assert analysis.rate_from == "turning"
+    assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.02)
     assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
 
 

@@ -27,6 +27,7 @@ from rotrate_cli.cli import (
     check_method,
     emit,
     fail,
+    in_flags,
     numbers,
     progress_bar,
     run,
@@ -145,6 +146,9 @@ def analyze_command(
                                                     help="With several inputs: write each "
                                                                          "one's report here as STEM.json "
                                                                          "(STEM.csv with --format csv).")] = None,
+    resume: Annotated[bool, typer.Option("--resume", metavar="",
+                                         help="With --output-dir: skip the inputs whose reports are there "
+                                              "already (a batch run again after an interrupt).")] = False,
     fmt: FormatOption = None,
     output: OutputOption = None,
     force: ForceOption = False,
@@ -177,7 +181,9 @@ def analyze_command(
             if outputs.pictures_or_series:
                 raise InputError("--series-csv, --overlay and --plot take one input; with several, use --output-dir")
             return _batch(sources, config, expect, tolerance, jobs, scheduler, output_dir, form, report, force,
-                          strict)
+                          strict, quiet=quiet, resume=resume)
+        if resume:
+            raise InputError("--resume skips the inputs whose reports --output-dir holds: give --output-dir")
         if scheduler is not None:
             raise InputError("--scheduler is for several inputs (a batch); with one, drop it")
         return _one(sources[0], config, outputs, form, units, quiet, expect, tolerance, strict)
@@ -249,6 +255,10 @@ class _Outputs:
         for picture in (self.overlay, self.plot):
             if picture is not None:
                 check_output_path(picture, self.force)
+        if self.plot is not None:
+            from rotrate_cli.cli.plots import check_plot
+
+            check_plot(self.plot)
         if self.overlay is not None and self.overlay.suffix.lower() not in OVERLAY_SUFFIXES:
             # OpenCV wrote a stream of JPEG frames under an image's name (out.png): a broken picture
             raise InputError(f"--overlay writes a video: give it a name ending in {', '.join(OVERLAY_SUFFIXES[1:])}"
@@ -348,22 +358,51 @@ def _detail_paths(sources: list[str], folder: Path, suffix: str) -> list[Path]:
 
 def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tolerance: float | None, jobs: int,
            scheduler: str | None, output_dir: Path | None, fmt: str, output: Path | None, force: bool,
-           strict: bool = False) -> int:
-    """Analyse several inputs; one summary row each; the worst input's exit code."""
-    from rotrate_cli.batch import Job, batch_exit_code, run_batch
+           strict: bool = False, quiet: bool = False, resume: bool = False) -> int:
+    """Analyse several inputs; one summary row each; the worst input's exit code. Each input's
+    report is written as soon as it finishes, with a progress line (unless ``quiet``); with
+    ``resume``, the inputs whose reports are there already are skipped."""
+    import time
+
+    from rotrate_cli.batch import Job, Outcome, batch_exit_code, run_batch
     from rotrate_cli.cli.report import render, render_summary, summary_text
 
-    details: list[Path] = []
+    if resume and output_dir is None:
+        raise InputError("--resume skips the inputs whose reports --output-dir holds: give --output-dir")
+    details: dict[str, Path] = {}
+    skipped: dict[str, Outcome] = {}
     if output_dir is not None:
         make_folder(output_dir)
-        details = _detail_paths(sources, output_dir, ".csv" if fmt == "csv" else ".json")
-        for path in details:
+        for source, path in zip(sources, _detail_paths(sources, output_dir, ".csv" if fmt == "csv" else ".json"),
+                                strict=True):
+            if resume and path.exists():
+                skipped[source] = Outcome(source, "skipped", None, f"its report {path} is there already (--resume)")
+                continue
             check_output_path(path, force)  # before a long run, not after
-    outcomes = said_outcomes(run_batch([Job(source, config, expect, tolerance, strict) for source in sources], jobs,
-                                       scheduler=scheduler))
-    for outcome, path in zip(outcomes, details, strict=False):
-        if outcome.analysis is not None:
-            write_text(path, render(outcome.analysis, "csv" if fmt == "csv" else "json"), force)
+            details[source] = path
+    todo = [source for source in sources if source not in skipped]
+    started, count = time.monotonic(), [len(skipped)]
+    console = Console(stderr=True, highlight=False, soft_wrap=True)
+
+    def done(outcome: Outcome) -> None:
+        """Keep a finished input's report at once (an interrupt later loses nothing) and say so."""
+        count[0] += 1
+        if outcome.analysis is not None and outcome.source in details:
+            write_text(details[outcome.source], render(said(outcome.analysis), "csv" if fmt == "csv" else "json"),
+                       force)
+        if not quiet:
+            if outcome.analysis is not None:
+                said_line = (f"{outcome.analysis.omega_rad_s:.4g} rad/s, {outcome.analysis.quality}"
+                             + ("" if outcome.status == "ok" else f" ({outcome.status})"))
+            else:
+                said_line = f"{outcome.status}: {in_flags(outcome.error)}"
+            console.print(f"rotrate: [{count[0]}/{len(sources)}] {outcome.source}: {said_line} "
+                          f"({time.monotonic() - started:.0f} s)", markup=False)
+
+    ran = said_outcomes(run_batch([Job(source, config, expect, tolerance, strict) for source in todo], jobs,
+                                  done=done, scheduler=scheduler))
+    by_source = {outcome.source: outcome for outcome in ran} | skipped
+    outcomes = [by_source[source] for source in sources]
     if output is not None:
         write_text(output, summary_text(outcomes, fmt), force)
     elif fmt == "table":

@@ -94,9 +94,14 @@ def frame_command(
     """Write one frame with a pixel grid and the rotation axis where it is found: read --fixation off it."""
 
     def job() -> int:
+        import cv2
+
         from rotrate_cli.analysis import AnalysisConfig, analyze
         from rotrate_cli.output.overlay import draw_axis, draw_grid, frame_at, write_image
         from rotrate_cli.video.decode import FrameSource
+
+        if not cv2.haveImageWriter(str(output)):  # before any frame is read
+            raise InputError(f"-o writes a picture: give it a name ending in .png or .jpg (got {output.name})")
 
         if not 5 <= grid <= 10_000:
             raise InputError("--grid takes a spacing in pixels, 5 or more")

@@ -30,6 +30,26 @@ TRACKS_DRAWN = 8
 SIZE_PX = (1200, 1100)
 
 
+#: The picture formats matplotlib writes (by the file's suffix), known without importing it.
+PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".svgz", ".jpg", ".jpeg", ".eps", ".ps", ".tif", ".tiff", ".webp")
+
+
+def check_plot(path: Path) -> None:
+    """Fail before any frame is read where ``--plot`` could not be drawn: matplotlib missing, or a
+    format it does not write.
+
+    Raises:
+        InputError: either.
+    """
+    import importlib.util
+
+    if importlib.util.find_spec("matplotlib") is None:
+        raise InputError("--plot needs matplotlib: pip install 'rotrate[plot]'")
+    if path.suffix.lower() not in PLOT_SUFFIXES:
+        raise InputError(f"--plot draws a picture: give it a name ending in {', '.join(PLOT_SUFFIXES)} "
+                         f"(got {path.name})")
+
+
 def write_plot(analysis: Analysis, path: Path, force: bool = False) -> None:
     """Write the three-panel picture of ``analysis`` to ``path`` (PNG, or what the suffix says).
 
