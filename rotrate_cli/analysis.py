@@ -27,7 +27,7 @@ from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.runtime.pools import pipeline_threads
 from rotrate_cli.scene.disc import DiscView
 from rotrate_cli.scene.focal import FocalEstimate
-from rotrate_cli.scene.picture_angle import PictureAngle, measure_angle
+from rotrate_cli.scene.picture_angle import PictureAngle, measure_angle, window_rates
 from rotrate_cli.scene.reasons import against_rate, name_rejections, track_places
 from rotrate_cli.scene.sense import not_side_view, sense_of_turning
 from rotrate_cli.scene.turning import PictureTurning, picture_turning
@@ -49,7 +49,7 @@ from rotrate_cli.stages.period import Period, Thumbnails, find_period
 from rotrate_cli.stages.tracks import Footage, NothingTracked, ProgressCallback, read_footage
 from rotrate_cli.stages.verdict import Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
-from rotrate_cli.stages.windows import judged_series
+from rotrate_cli.stages.windows import AngleWindows, judged_series
 from rotrate_cli.tracking.steady import CameraPath, Shake
 
 __all__ = ["Analysis", "AnalysisConfig", "ProgressCallback", "analyze", "analyze_tracks", "rates_from_offsets",
@@ -305,6 +305,19 @@ def _picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFra
                          search_centre=view is None and geometry.fixation_found)
 
 
+def _angle_windows(footage: Footage, angle: Callable[[], PictureAngle | None]) -> AngleWindows:
+    """omega(t) per window from the picture's own angle (measured here if the verdict did not),
+    for :func:`rotrate_cli.stages.windows.judged_series`."""
+
+    def rates(centres_s: np.ndarray, window_s: float) -> list[tuple[float, float, float] | None]:
+        measured = angle()
+        if measured is None:
+            return [None] * len(centres_s)
+        return window_rates(footage.pairs.angle_frames.frames, measured, footage.info.width_px, centres_s, window_s)
+
+    return rates
+
+
 def _angle_guess(footage: Footage, config: AnalysisConfig) -> float:
     """The axis's angle before the geometry stage: for the paper's sample spacing."""
     if config.axis_angle_deg is not None:
@@ -337,8 +350,12 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     result = checked.result
     combined = result.combined
     tracks_rate = combined if combined.tracks_used > 0 else None
-    def measured_angle() -> PictureAngle | None:
-        return _picture_angle(footage, geometry, view_tracks, tracks_rate)
+    measured: dict[str, PictureAngle | None] = {}
+
+    def measured_angle() -> PictureAngle | None:  # once, for the verdict and omega(t)
+        if "angle" not in measured:
+            measured["angle"] = _picture_angle(footage, geometry, view_tracks, tracks_rate)
+        return measured["angle"]
 
     angle: PictureAngle | None | Callable[[], PictureAngle | None] = measured_angle
     if combined.tracks_used == 0 and period is None:
@@ -346,18 +363,20 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         angle = _picture_angle(footage, geometry, view_tracks, None) if config.method == "fit" else None
         if angle is None:
             raise NoResultError(no_result_message(result.features))
+        measured["angle"] = angle
     if period is not None:
         period = turns_between(period, tracks_rate, combined.tracks_used)
     verdict = judge(tracks_rate, period, combined.tracks_used, checked.doubts,
                     turning=lambda: _picture_turning(footage, geometry, view_tracks, period), angle=angle)
-    footage.pairs.clear()
     features, tracks_used = result.features, combined.tracks_used
     if verdict.rate_from in ("repetition", "turning"):  # the tracks shown as used are those that agree with it
         features = against_rate(features, verdict.omega_rad_s)
         tracks_used = int(features["inlier"].sum())
     if isinstance(extra.get("series"), pd.DataFrame):
         extra["series"] = judged_series(extra["series"], verdict, footage.thumbnails,  # type: ignore[arg-type]
-                                        footage.info.clock_resolution_s, config.window_s or 0.0)
+                                        footage.info.clock_resolution_s, config.window_s or 0.0,
+                                        _angle_windows(footage, measured_angle))
+    footage.pairs.clear()
     size_px = (footage.info.width_px, footage.info.height_px)
     direction, in_picture = result.direction, False
     if view_tracks is not None:

@@ -316,8 +316,8 @@ def _units(scale: float | None, unit: str | None) -> tuple[float, str] | None:
 def _write_overlay(source: str, fps: float | None, start: float, end: float | None, analysis: Analysis,
                    path: Path, force: bool, times_s: np.ndarray | None = None) -> None:
     """The overlay video of a finished analysis (see :func:`rotrate_cli.output.overlay.write_overlay`):
-    the running rate of the tracks, or, where the rate is the clip's repetition (a whole-clip
-    measurement), the reported rate throughout."""
+    the running rate of the tracks, or, where the rate is the clip's repetition or the picture's
+    turning (not the tracks'), the reported rate throughout."""
     import numpy as np
 
     from rotrate_cli.fitting.series import running_rate
@@ -329,7 +329,7 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
     times = running["time_s"].to_numpy()
 
     def at(time_s: float) -> tuple[float, float, float]:
-        if analysis.rate_from == "repetition":
+        if analysis.rate_from in ("repetition", "turning"):  # not the tracks' rate: the headline throughout
             return analysis.omega_rad_s, analysis.omega_low_rad_s, analysis.omega_high_rad_s
         index = int(np.searchsorted(times, time_s + 1e-9, side="right")) - 1
         if index < 0:

@@ -147,10 +147,10 @@ def _time_panel(axes: Axes, analysis: Analysis) -> None:
     else:
         series = running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection, analysis.camera))
         title = "omega from the start up to each time, with its 95% band"
-    if analysis.rate_from == "repetition":
-        # the reported rate is a whole-clip measurement: the tracks' own rates are shown beside it
-        title = ("the tracks' " + title[0].lower() + title[1:] + "; dashed: the reported rate, from the clip's "
-                 "repetition")
+    if analysis.rate_from in ("repetition", "turning") and analysis.series is None:
+        # the reported rate is not the tracks': their own rates are shown beside it
+        source = "the clip's repetition" if analysis.rate_from == "repetition" else "the picture's turning"
+        title = ("the tracks' " + title[0].lower() + title[1:] + f"; dashed: the reported rate, from {source}")
         axes.axhspan(analysis.omega_low_rad_s, analysis.omega_high_rad_s, color="C2", alpha=0.2)
     finite = series[np.isfinite(series["omega_rad_s"])]
     if len(finite):

@@ -310,6 +310,12 @@ def _long_rate(changes: list[_Change], view: DiscView, times: np.ndarray, angles
     apart (the farthest within :data:`FARTHEST_DEG`, and one half way), sought near the chained
     angles; and its standard error, widened for changes used in several pairs."""
     unrolled_changes, weight = _unrolled_changes(changes, view, angles, rings)
+    return _rate_of(changes, unrolled_changes, weight, times, angles_deg)
+
+
+def _rate_of(changes: list[_Change], unrolled_changes: list[np.ndarray], weight: np.ndarray, times: np.ndarray,
+             angles_deg: np.ndarray) -> tuple[float, float]:
+    """:func:`_long_rate` of changes already unrolled."""
     index_of = {changes[i].time_s: i for i in range(len(changes))}
     chained = [(index_of[t], float(a)) for t, a in zip(times, angles_deg, strict=True)]
     rows = []
@@ -357,3 +363,36 @@ def _view_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angl
     rates = [_long_rate(changes, other, times, angles_deg, *coarse)[0] for other in varied]
     moved = [abs(rate - base) for rate in rates if math.isfinite(rate)]
     return max(moved) if moved and math.isfinite(base) else 0.0
+
+
+def window_rates(kept: list[tuple[int, float, np.ndarray]], angle: PictureAngle, width_px: int,
+                 centres_s: np.ndarray, window_s: float) -> list[tuple[float, float, float] | None]:
+    """omega(t) from the picture's angle: per window (``centres_s``, ``window_s`` long) the rate
+    and 95% interval (rad/s, magnitudes) fitted as the whole clip's is (:func:`_long_rate`) to the
+    changes inside it, through the clip's view; the interval also holds the clip's own view
+    uncertainty, in proportion. None for a window with too few changes or too small a turn."""
+    changes = _changes(kept)
+    if len(changes) < MIN_CHANGES:
+        return [None] * len(centres_s)
+    scale = changes[0].first.shape[1] / width_px
+    view = angle.view.scaled(scale)
+    share = max(angle.omega_rad_s - angle.omega_low_rad_s,
+                angle.omega_high_rad_s - angle.omega_rad_s) / angle.omega_rad_s
+    times = np.array([change.time_s for change in changes])
+    chained = np.interp(times, angle.times_s, angle.angles_deg)
+    unrolled_changes, weight = _unrolled_changes(changes, view, ANGLES, RINGS)
+    rates: list[tuple[float, float, float] | None] = []
+    for centre in centres_s:
+        inside = np.flatnonzero(np.abs(times - centre) <= window_s / 2 + 1e-9)
+        if len(inside) < MIN_CHANGES or abs(chained[inside[-1]] - chained[inside[0]]) < MIN_TURNED_DEG:
+            rates.append(None)
+            continue
+        part = [changes[i] for i in inside]
+        rate, scatter = _rate_of(part, [unrolled_changes[i] for i in inside], weight, times[inside], chained[inside])
+        if not math.isfinite(rate):
+            rates.append(None)
+            continue
+        omega = math.radians(abs(rate))
+        half = math.radians(1.96 * scatter) + share * omega
+        rates.append((omega, max(0.0, omega - half), omega + half))
+    return rates

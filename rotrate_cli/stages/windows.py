@@ -3,21 +3,30 @@ return inside the window, or the tracks where they agree with it), with its own 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.stages.period import Thumbnails, find_period
 from rotrate_cli.stages.verdict import MIN_TRACKS, WEAK_HALF_WIDTH, Verdict
 
+#: Per window, the picture's angle's rate and interval, or None (see
+#: :func:`rotrate_cli.scene.picture_angle.window_rates`): given the windows' centres and length.
+AngleWindows = Callable[[np.ndarray, float], list[tuple[float, float, float] | None]]
+
 
 def judged_series(series: pd.DataFrame, verdict: Verdict, thumbnails: Thumbnails, clock_resolution_s: float,
-                  window_s: float) -> pd.DataFrame:
+                  window_s: float, angle_windows: AngleWindows | None = None) -> pd.DataFrame:
     """omega(t) from the source behind the headline (``series``: the tracks' windows, see
     :func:`rotrate_cli.fitting.series.rate_series`), with ``rate_from`` and ``quality`` per window.
     Where the headline is the picture's return, each window that holds a return is rated by it
     (as many returns a turn as the headline's); a window with none keeps the tracks' rate where
     it agrees with the headline, and is weak otherwise. Where the headline is the tracks', a
-    window is weak when its interval is wider than the verdict's rule or few tracks stand behind it."""
+    window is weak when its interval is wider than the verdict's rule or few tracks stand behind it.
+    ``angle_windows``: the picture's own angle per window, which rates the windows of a headline
+    from the picture's turning, and those of a return-rated one that hold no return (a window
+    shorter than a turn: the wheel's 2 s windows of a 2.8 s turn)."""
     rows = series.copy()
     rate_from = np.full(len(rows), "tracks", dtype=object)
     quality = np.full(len(rows), "good", dtype=object)
@@ -26,17 +35,31 @@ def judged_series(series: pd.DataFrame, verdict: Verdict, thumbnails: Thumbnails
     high = rows["omega_high_rad_s"].to_numpy(dtype=float).copy()
     times = thumbnails.times_s
     images = thumbnails.images
-    for index, centre in enumerate(rows["time_s"].to_numpy(dtype=float)):
-        found = None
+    centres = rows["time_s"].to_numpy(dtype=float)
+    returns = [None] * len(rows)
+    for index, centre in enumerate(centres):
         if verdict.rate_from == "repetition" and len(times):
             inside = (times >= centre - window_s / 2 - 1e-9) & (times <= centre + window_s / 2 + 1e-9)
             if inside.sum() >= 8:
-                found = find_period(times[inside], images[inside], clock_resolution_s)
+                returns[index] = find_period(times[inside], images[inside], clock_resolution_s)
+    by_angle: list[tuple[float, float, float] | None] = [None] * len(rows)
+    unreturned = [index for index, found in enumerate(returns) if found is None or found.far_apart]
+    if angle_windows is not None and verdict.rate_from in ("repetition", "turning") and unreturned:
+        for index, rate in zip(unreturned, angle_windows(centres[unreturned], window_s), strict=True):
+            by_angle[index] = rate
+    for index, found in enumerate(returns):
         if found is not None and not found.far_apart:
             omega[index], low[index], high[index] = found.omega_rad_s(verdict.repeats_per_turn)
             rate_from[index] = "repetition"
             agrees = abs(omega[index] / verdict.omega_rad_s - 1.0) <= WEAK_HALF_WIDTH
             quality[index] = "good" if agrees and verdict.quality == "good" else "weak"
+            continue
+        if by_angle[index] is not None:
+            omega[index], low[index], high[index] = by_angle[index]
+            rate_from[index] = "turning"
+            half = max(omega[index] - low[index], high[index] - omega[index]) / omega[index]
+            agrees = abs(omega[index] / verdict.omega_rad_s - 1.0) <= WEAK_HALF_WIDTH
+            quality[index] = "good" if agrees and half <= WEAK_HALF_WIDTH and verdict.quality == "good" else "weak"
             continue
         half = max(omega[index] - low[index], high[index] - omega[index]) / omega[index] if omega[index] > 0 else np.inf
         told = rows["tracks_used"].iloc[index] >= MIN_TRACKS and half <= WEAK_HALF_WIDTH
