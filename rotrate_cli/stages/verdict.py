@@ -150,17 +150,34 @@ def _listed(period: Period, counts: list[int] | tuple[int, ...]) -> str:
     return shown + (f", ... k = {counts[-1]}: {period.omega_rad_s(counts[-1])[0]:.4g}" if len(counts) > LISTED else "")
 
 
+def _count_by_angle(period: Period, angle: PictureAngle | None) -> list[int] | None:
+    """The one count the picture's own angle tells (its interval, within
+    :data:`TURNING_ALLOWANCE`, holds one count's rate alone); None where it tells none (no
+    measurement, a turn between frames that fits two ways, or several counts)."""
+    if angle is None or angle.alike_deg is not None:
+        return None
+    within = counts_within(period, angle.omega_low_rad_s / (1 + TURNING_ALLOWANCE),
+                           angle.omega_high_rad_s * (1 + TURNING_ALLOWANCE))
+    return within if len(within) == 1 else None
+
+
 def tell_repeats(period: Period, tracks: Combined | None, tracks_used: int,
-                 turning: PictureTurning | Callable[[], PictureTurning | None] | None) -> Repeats:
+                 turning: PictureTurning | Callable[[], PictureTurning | None] | None,
+                 angle: PictureAngle | Callable[[], PictureAngle | None] | None = None) -> Repeats:
     """How many repeats of the picture make a turn (see :class:`Repeats`): the counts the tracks'
     rate and the picture's own turning each allow (the turning measured only where the tracks
     do not tell one count alone); one count left is decided; none, or several, is weak and
-    listed. A return alone never tells: a fan of five blades comes back after a fifth of a turn."""
+    listed. A return alone never tells: a fan of five blades comes back after a fifth of a turn.
+    Where the turning test says nothing, the picture's own angle (``angle``: measured densely, or
+    a call that measures it) may tell the count (the wheel shrunk to half its size, whose turning
+    test was too broad)."""
     return_s = f"the picture comes back every {period.period_s:.4g} s"
     by_tracks = _by_tracks(period, tracks, tracks_used)
     by_turning = None
     if by_tracks is None or len(by_tracks) != 1:
         by_turning = _by_turning(period, turning() if callable(turning) else turning)
+        if by_turning is None:  # the picture's angle, measured densely (slower), where the test said nothing
+            by_turning = _count_by_angle(period, angle() if callable(angle) else angle)
     told = [(name, set(counts)) for name, counts in (("the tracks' rate", by_tracks),
                                                      ("the picture's turning", by_turning)) if counts is not None]
     if not told:
@@ -253,7 +270,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
         return _tracks_only(tracks, tracks_used, doubts)
     notes: list[str] = list(doubts)
     weak: list[str] = []
-    told = tell_repeats(period, tracks, tracks_used, turning)
+    told = tell_repeats(period, tracks, tracks_used, turning, angle)
     repeats, confirmed = told.repeats, told.decided
     weak.extend(told.weak)
     if not (confirmed and repeats > 1 and period.excess > SAME_PICTURE):
