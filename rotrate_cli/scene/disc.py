@@ -23,8 +23,8 @@ import cv2
 import numpy as np
 
 #: Angles and rings of the unrolled picture while the view is sought (coarse: a search).
-SEARCH_ANGLES = 360
-SEARCH_RINGS = 100
+SEARCH_ANGLES = 256
+SEARCH_RINGS = 64
 #: Rings whose picture changes less than this from frame to frame (grey levels, on average)
 #: carry nothing.
 MOVING_LEVELS = 1.0
@@ -135,7 +135,7 @@ def moving_weight(changes: list[np.ndarray], inside: np.ndarray) -> np.ndarray:
     return (inside & moving[None, :]).astype(np.float32)
 
 
-def ring_correlation(first: np.ndarray, second: np.ndarray, weight: np.ndarray, upsample: int = 16,
+def ring_correlation(first: np.ndarray, second: np.ndarray, weight: np.ndarray, upsample: int = 8,
                      taper: float = 12.0) -> np.ndarray:
     """The normalised correlation of two unrolled pictures (rows: angles) for every shift of the
     second along the angle (``upsample`` samples a row), over the samples ``weight`` marks in
@@ -193,7 +193,7 @@ def second_peak(correlation: np.ndarray, best_deg: float, apart_deg: float) -> f
 
 
 def view_score(pairs: list[tuple[np.ndarray, np.ndarray]], view: DiscView, lags: tuple[int, ...],
-               per_lag: int = 3) -> float:
+               per_lag: int = 2) -> float:
     """How much of the picture's change (``pairs`` of consecutive frames, grey float32, in time
     order) lines up when shifted along the angle through ``view``: for a few changes ``lags``
     apart in the list, the best covariance over the shifts, each sample weighted by the area of the
@@ -246,7 +246,7 @@ class Candidate:
 
 
 def fitted_views(pairs: list[tuple[np.ndarray, np.ndarray]], start: DiscView, step_px: float, search_tilt: bool,
-                 search_centre: bool = False, budget: int = 160) -> list[Candidate]:
+                 search_centre: bool = False, budget: int = 100) -> list[Candidate]:
     """The views that line the changes of the picture up best (:func:`view_score`), sought from
     ``start`` (moving its centre by about ``step_px``): the best about the given centre, tilted
     freely and face on, and where ``search_centre``, the best few elsewhere (apart from each

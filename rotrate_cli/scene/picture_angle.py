@@ -42,7 +42,7 @@ from rotrate_cli.video.frames import Frame
 MOST_KEPT = 128
 SIDE_PX = 320
 #: Changes measured at most (evenly over those kept), angles a turn and rings of the measurement.
-MOST_CHANGES = 96
+MOST_CHANGES = 64
 ANGLES = 720
 RINGS = 128
 #: A change is compared with a new one once the picture has turned this far from it.
@@ -54,6 +54,10 @@ PREDICTED_SHARE = 0.15
 RECENT = 8
 #: A change whose peak is lower than this fraction of the typical one is left out.
 WEAK_PEAK = 0.5
+#: Changes larger than this many times the median (energy) are left out; the chain starts from
+#: the median rate of this many pairs of nearby changes.
+OUTSIZE = 6.0
+FIRST_PAIRS = 9
 #: Changes this far apart (at most) time the rate.
 FARTHEST_DEG = 150.0
 #: Fewer changes than this, or a turn smaller than this, tell no rate.
@@ -196,26 +200,33 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
     pairs = [(change.first, change.second) for change in changes]
     views = fitted_views(pairs, start.scaled(scale), step_px=0.04 * changes[0].first.shape[1],
                          search_tilt=search_tilt, search_centre=search_centre)
-    measured = [(candidate, angle) for candidate in views if (angle := _through(changes, candidate.view)) is not None]
-    if not measured:
-        return None
     # the view about the axis the tracks tell (given, or found from them: evidence the picture's
     # changes do not have), unless another lines the picture up clearly better (the record's
-    # found axis lay 600 px from its spindle); the best view's reading otherwise
-    about = [pair for pair in measured if pair[0].about_given]
-    elsewhere = [pair for pair in measured if not pair[0].about_given]
-    best = max(about or elsewhere, key=lambda pair: pair[0].score)
-    if elsewhere and about:
-        other = max(elsewhere, key=lambda pair: pair[0].score)
-        best = other if other[0].score >= CLEARLY_BETTER * best[0].score else best
-    chosen = best[1]
-    low, high = chosen.omega_low_rad_s, chosen.omega_high_rad_s
-    # another view that lines the picture up nearly as well is as likely: the interval holds its
-    # reading too (the record's first 0.3 turn: the best view read -8.5%, the next +0.1%)
-    for candidate, angle in measured:
-        if candidate.score >= NEARLY_AS_WELL * best[0].score:
-            low, high = min(low, angle.omega_low_rad_s), max(high, angle.omega_high_rad_s)
-    return replace(chosen, omega_low_rad_s=low, omega_high_rad_s=high, view=chosen.view.scaled(1.0 / scale))
+    # found axis lay 600 px from its spindle); views that line it up nearly as well as the one
+    # taken are measured too, and the interval holds their readings (the record's first 0.3 turn:
+    # the best view read -8.5%, the next +0.1%); the others are not measured (a second or more each)
+    about = [candidate for candidate in views if candidate.about_given]
+    elsewhere = [candidate for candidate in views if not candidate.about_given]
+    first = about[0] if about else elsewhere[0]
+    if elsewhere and elsewhere[0].score >= CLEARLY_BETTER * first.score:
+        first = elsewhere[0]
+    taken = _through(changes, first.view)
+    rivals = [candidate for candidate in views if candidate is not first]
+    if taken is None:  # the view taken tells no rate: the next best, if any does
+        for candidate in rivals:
+            taken = _through(changes, candidate.view)
+            if taken is not None:
+                first = candidate
+                break
+        if taken is None:
+            return None
+    low, high = taken.omega_low_rad_s, taken.omega_high_rad_s
+    for candidate in views:
+        if candidate is not first and candidate.score >= NEARLY_AS_WELL * first.score:
+            other = _through(changes, candidate.view)
+            if other is not None:
+                low, high = min(low, other.omega_low_rad_s), max(high, other.omega_high_rad_s)
+    return replace(taken, omega_low_rad_s=low, omega_high_rad_s=high, view=taken.view.scaled(1.0 / scale))
 
 
 def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
@@ -256,38 +267,63 @@ def _chain(changes: list[_Change], view: DiscView, angles: int, rings: int) -> t
     unrolled_changes, weight = _unrolled_changes(changes, view, angles, rings)
     if weight.sum() < 50:
         return None
-    measured: dict[int, float] = {0: 0.0}
-    heights: dict[int, float] = {0: 1.0}
-    keys = [0]
-    rate = None  # degrees a second, from the latest angles
-    alike, first_step = None, 0.0
-    for k in range(1, len(changes)):
+    # a change far larger than the typical one is no turn's (a still first frame, a flash, a
+    # damaged stretch): left out
+    energy = np.array([float(np.sum((change * weight) ** 2)) for change in unrolled_changes])
+    ordinary = np.flatnonzero(energy <= OUTSIZE * max(float(np.median(energy)), 1e-9))
+    if len(ordinary) < MIN_CHANGES:
+        return None
+    start = int(ordinary[0])
+    rate, first_step, alike = _first_rate(changes, unrolled_changes, weight, ordinary)
+    measured: dict[int, float] = {start: 0.0}
+    heights: dict[int, float] = {start: 1.0}
+    keys = [start]
+    for k in ordinary[1:]:
         usable = [key for key in keys if _apart(changes[key], changes[k])]
         if not usable:
             continue
         key = usable[-1]
         correlation = ring_correlation(unrolled_changes[key], unrolled_changes[k], weight)
-        if rate is None:
-            shift, height = shift_deg(correlation)
-            first_step = shift
-            other = second_peak(correlation, shift, max(5.0, 0.5 * abs(shift)))
-            if other >= ALIKE_PEAK * height:
-                alike = _other_shift(correlation, shift, max(5.0, 0.5 * abs(shift)))
-        else:
-            predicted = rate * (changes[k].time_s - changes[key].time_s)
-            shift, height = shift_deg(correlation, predicted, PREDICTED_WITHIN_DEG + PREDICTED_SHARE * abs(predicted))
-            if len(heights) > 3 and height < WEAK_PEAK * float(np.median(list(heights.values())[1:])):
-                continue  # a change that does not line up (a hand across the picture): left out
-        measured[k] = measured[key] + shift
-        heights[k] = height
-        rate = _recent_rate([(changes[i].time_s, measured[i]) for i in sorted(measured)[-RECENT:]])
-        if abs(measured[k] - measured[key]) > KEY_DEG:
-            keys.append(k)
+        predicted = rate * (changes[k].time_s - changes[key].time_s)
+        shift, height = shift_deg(correlation, predicted, PREDICTED_WITHIN_DEG + PREDICTED_SHARE * abs(predicted))
+        if len(heights) > 3 and height < WEAK_PEAK * float(np.median(list(heights.values())[1:])):
+            continue  # a change that does not line up (a hand across the picture): left out
+        measured[int(k)] = measured[key] + shift
+        heights[int(k)] = height
+        rate = _recent_rate([(changes[i].time_s, measured[i]) for i in sorted(measured)[-RECENT:]]) or rate
+        if abs(measured[int(k)] - measured[key]) > KEY_DEG:
+            keys.append(int(k))
     order = sorted(measured)
     if len(order) < MIN_CHANGES:
         return None
     return (np.array([changes[i].time_s for i in order]), np.array([measured[i] for i in order]),
             np.array([heights[i] for i in order[1:]]), alike, first_step)
+
+
+def _first_rate(changes: list[_Change], unrolled_changes: list[np.ndarray], weight: np.ndarray,
+                ordinary: np.ndarray) -> tuple[float, float, float | None]:
+    """The rate to start the chain with (degrees a second): the median of the rates of up to
+    :data:`FIRST_PAIRS` pairs of nearby changes over the clip, each its best shift anywhere
+    (one pair's could be a still frame's or a hand's); the step of the pair nearest that median,
+    and its other shift that fits nearly as well (see :class:`PictureAngle`), or None."""
+    found = []
+    for i in ordinary[:: max(1, len(ordinary) // FIRST_PAIRS)]:
+        later = [k for k in ordinary if k > i and _apart(changes[int(i)], changes[int(k)])]
+        if not later:
+            continue
+        k = int(later[0])
+        correlation = ring_correlation(unrolled_changes[int(i)], unrolled_changes[k], weight)
+        shift, height = shift_deg(correlation)
+        apart = max(5.0, 0.5 * abs(shift))
+        other = (_other_shift(correlation, shift, apart)
+                 if second_peak(correlation, shift, apart) >= ALIKE_PEAK * height else None)
+        found.append((shift / (changes[k].time_s - changes[int(i)].time_s), shift, other))
+    if not found:
+        return 0.0, 0.0, None
+    middle = float(np.median([rate for rate, _, _ in found]))
+    rate, step, other = min(found, key=lambda item: abs(item[0] - middle))
+    alike = sum(item[2] is not None for item in found) > len(found) / 2
+    return middle, step, other if alike else None
 
 
 def _recent_rate(points: list[tuple[float, float]]) -> float | None:
@@ -347,7 +383,7 @@ def _view_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angl
     way, or about two directions where the plane faces the camera), the axis's point by
     :data:`CENTRE_VARIED` of the picture's width either way (measured coarsely, against the same
     measure through the view found)."""
-    coarse = (360, 100)
+    coarse = (256, 64)
     base, _ = _long_rate(changes, view, times, angles_deg, *coarse)
     step = CENTRE_VARIED * changes[0].first.shape[1]
     x, y = view.centre_px
