@@ -163,3 +163,16 @@ def test_output_dash_is_standard_output(tmp_path: Path, monkeypatch: pytest.Monk
     assert result.exit_code == 0, result.output
     assert json.loads(result.stdout)["omega"] > 0
     assert not (tmp_path / "-").exists()
+
+
+@pytest.mark.parametrize("args", [["analyze", "--bogus", "x"], ["analyze"], ["nosuch"]])
+def test_usage_errors_are_one_line_and_exit_2(args: list[str]) -> None:
+    """Click's framed usage box was five lines; the README promises one line for every error."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "rotrate_cli", *args], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rotrate: error: ") and "--help" in lines[0]
+    assert "Traceback" not in done.stderr

@@ -274,8 +274,24 @@ from rotrate_cli.cli import analyze as _analyze, commands as _commands  # noqa: 
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """Console-script entry point. A usage error (an unknown option, a missing argument) is one
+    line on standard error and exit 2, as every other error, not Click's framed box."""
+    try:  # Typer 0.2x carries its own copy of Click
+        from typer._click.exceptions import ClickException
+    except ImportError:  # pragma: no cover - an older Typer on Click itself
+        from click.exceptions import ClickException
+
     _one_blas_thread()
     if "--debug" not in sys.argv:
         _quiet_native_logs()
-    app()
+    try:
+        code = app(standalone_mode=False)
+    except ClickException as error:
+        context = getattr(error, "ctx", None)
+        where = f"rotrate {context.info_name} --help" if context is not None and context.parent else "rotrate --help"
+        Console(stderr=True, highlight=False, soft_wrap=True).print(
+            f"rotrate: error: {error.format_message()} (see {where})", markup=False)
+        sys.exit(error.exit_code)
+    except typer.Abort:
+        sys.exit(130)
+    sys.exit(code if isinstance(code, int) else 0)

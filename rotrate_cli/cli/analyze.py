@@ -47,7 +47,8 @@ if TYPE_CHECKING:
 
 @app.command("analyze")
 def analyze_command(
-    videos: Annotated[list[str], typer.Argument(help="Video file(s), image folder, printf pattern like "
+    videos: Annotated[list[str], typer.Argument(metavar="VIDEO",
+                                                help="Video file(s), image folder, printf pattern like "
                                                       "frames/img.%03d.png, folders of videos, or globs.")],
     fixation: Annotated[str | None, typer.Option("--fixation", metavar="X,Y|auto",
                                                  help="X,Y pixel of a point on the rotation axis, or "
@@ -55,7 +56,8 @@ def analyze_command(
                                                                     "(required, except with --segment).")] = None,
     fps: Annotated[
         float | None, typer.Option("--fps", metavar="FPS",
-                                   help="Frame rate; overrides the file's, required for images.")
+                                   help="Frame rate; overrides the file's; for images without "
+                                        "EXIF capture times (else from them).")
     ] = None,
     start: Annotated[float, typer.Option("--start", metavar="SECONDS", help="Start time, s.")] = 0.0,
     end: Annotated[float | None, typer.Option("--end", metavar="SECONDS", help="End time, s.")] = None,

@@ -134,8 +134,9 @@ def frame_command(
 @app.command("omega")
 def omega_command(
     tracks: Annotated[Path, typer.Argument(help="Tracks CSV: track (or feature), frame, optional time_s, position.")],
-    fixation: Annotated[float, typer.Option("--fixation", metavar="X,Y|auto",
-                                            help="Axis position, in the position column's units.")],
+    fixation: Annotated[float, typer.Option("--fixation", metavar="POSITION",
+                                            help="The axis's position along the position column, in its "
+                                                 "units (one number).")],
     position_column: Annotated[str, typer.Option("--position-column", metavar="NAME",
                                                  help="The horizontal position column.")] = "x",
     fps: Annotated[float | None, typer.Option("--fps", metavar="FPS",
@@ -179,7 +180,7 @@ def synth_command(
     size: Annotated[str, typer.Option("--size", metavar="WxH", help="WIDTHxHEIGHT in pixels.")] = "640x360",
     projection: Annotated[str, typer.Option("--projection", metavar="NAME",
                                             help=f"One of {', '.join(PROJECTIONS)}.")] = "orthographic",
-    fov: Annotated[float, typer.Option("--fov", metavar="DEG|auto|ortho",
+    fov: Annotated[float, typer.Option("--fov", metavar="DEG",
                                        help="Horizontal field of view, degrees (perspective).")] = 25.0,
     axis_offset: Annotated[float, typer.Option("--axis-offset", metavar="PX",
                                                help="Axis offset from the centre, px.")] = 0.0,
