@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: bench-symmetry docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
+.PHONY: bench-symmetry bench-turning docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -88,6 +88,10 @@ bench-hard: $(STAMP)
 ## bench-symmetry: fans, spokes, checkered discs and drums whose picture repeats 2-16 times a turn, face on, tilted and from the side, slow and at 20-40 degrees a frame: right within 0.5% or weak, never a multiple called good (renders cached in bench_out/symmetry; about 2 minutes the first time)
 bench-symmetry: $(STAMP)
 	$(BIN)/python benchmarks/bench_symmetry.py
+
+## bench-turning: flat rotors rendered under a turn (0.3), face on and tilted, axis in and out of the frame (about a minute)
+bench-turning: $(STAMP)
+	$(BIN)/python benchmarks/bench_turning.py
 
 ## bench-random: 20 random rendered conditions (lenses to 75 degrees, 2-6 s, elevation to 60) measured with default settings and --fixation auto (about 10 minutes the first time)
 bench-random: $(STAMP)
