@@ -24,7 +24,7 @@ from rotrate_cli.scene.focal import parse_fov
 
 VIDEO_SUFFIXES = frozenset({".mp4", ".mov", ".avi", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"})
 SUMMARY_COLUMNS = ("file", "status", "omega", "omega_low", "omega_high", "rpm", "direction", "tracks_used",
-                   "quality", "error")
+                   "quality", "error", "warnings")
 #: Outcome statuses and the exit code each stands for (a batch exits with the largest).
 STATUS_CODES = {"ok": 0, "skipped": 0, "weak": 1, "off_target": 1, "no_result": 1, "bad_input": 2, "failed": 3}
 
@@ -207,8 +207,8 @@ def _run_on_dask(jobs: Sequence[Job], scheduler: str, done: Callable[[Outcome], 
 
 def summary_frame(outcomes: Sequence[Outcome]) -> pd.DataFrame:
     """One row per input: ``file, status, omega, omega_low, omega_high, rpm, direction,
-    tracks_used, error`` (rad/s; empty where there is no analysis; ``error`` carries the
-    analysis's warnings when it succeeded with one)."""
+    tracks_used, quality, error, warnings`` (rad/s; empty where there is no analysis; ``error``:
+    why there is none, or why the result failed a check; ``warnings``: the analysis's, joined)."""
     rows = []
     for outcome in outcomes:
         a = outcome.analysis
@@ -221,8 +221,9 @@ def summary_frame(outcomes: Sequence[Outcome]) -> pd.DataFrame:
             "direction": a.direction if a else "",
             "tracks_used": a.tracks_used if a else 0,
             "quality": a.quality if a else "",
+            "error": outcome.error,
             # a result with a caveat (a file cut off, say) keeps it in the row
-            "error": outcome.error or "; ".join(f"warning: {w}" for w in (a.warnings if a else ())),
+            "warnings": "; ".join(a.warnings) if a else "",
         })
     return pd.DataFrame(rows, columns=list(SUMMARY_COLUMNS))
 

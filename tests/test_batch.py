@@ -50,6 +50,9 @@ def test_a_batch_gives_one_row_per_input_and_goes_past_bad_files(broken: list[Pa
         assert row.omega == pytest.approx(expected, rel=0.01)
     assert "could not" in table.loc[3, "error"] and "empty" in table.loc[4, "error"]
     assert "no such file" in table.loc[5, "error"]
+    # the quality beside the status, and an input's warnings in their own column, not in `error`
+    assert table["quality"].tolist()[:3] == ["good"] * 3
+    assert (table["error"].head(3) == "").all() and "warnings" in table.columns
     assert sorted(p.name for p in out.iterdir()) == ["box_ortho.csv", "cylinder_ortho.csv", "sphere_ortho.csv"]
 
 

@@ -12,6 +12,7 @@ import json
 import math
 from collections import Counter
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
 
@@ -319,15 +320,22 @@ def summary_text(outcomes: list[Outcome], fmt: str) -> str:
 def render_summary(outcomes: list[Outcome], console: Console) -> None:
     """A batch's summary table for the terminal."""
     table = Table(title=f"rotrate: {len(outcomes)} inputs", title_justify="left")
-    for name in ("file", "status", "omega rad/s", "95% interval", "rpm", "direction", "tracks", "error"):
+    frame = summary_frame(outcomes)
+    # the files' own names where they tell the inputs apart: a path broken over lines reads badly
+    names = [Path(str(file)).name for file in frame["file"]]
+    shown = names if len(set(names)) == len(names) else [str(file) for file in frame["file"]]
+    for name in ("file", "status", "quality", "omega rad/s", "95% interval", "rpm", "direction", "tracks",
+                 "message"):
         table.add_column(name, justify="right" if name in ("omega rad/s", "rpm", "tracks") else "left",
-                         overflow="fold")
-    for row in summary_frame(outcomes).itertuples(index=False):
+                         overflow="fold", no_wrap=name in ("file", "status", "quality", "omega rad/s"))
+    for file, row in zip(shown, frame.itertuples(index=False), strict=True):
         ok = math.isfinite(row.omega)
-        table.add_row(str(row.file), str(row.status), f"{row.omega:.4f}" if ok else "",
+        message = row.error or (f"{len(row.warnings.split('; '))} warning(s): see --format json" if row.warnings
+                                else "")
+        table.add_row(file, str(row.status), str(row.quality), f"{row.omega:.4f}" if ok else "",
                       f"[{row.omega_low:.4f}, {row.omega_high:.4f}]" if ok and math.isfinite(row.omega_low) else "",
                       f"{row.rpm:.3f}" if ok else "", str(row.direction), str(row.tracks_used) if ok else "",
-                      str(row.error))
+                      message)
     console.print(table)
 
 
