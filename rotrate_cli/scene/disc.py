@@ -30,6 +30,8 @@ SEARCH_RINGS = 64
 MOVING_LEVELS = 1.0
 #: Starts refined besides the best about the given centre (apart from it and each other).
 REFINED_STARTS = 2
+#: Times a refinement's simplex search is started again from where it stopped (and gained).
+RESTARTS = 2
 #: The longest focal length tried, in picture widths (beyond, the view is affine).
 LONGEST_FOCAL = 20.0
 
@@ -304,9 +306,12 @@ def _refined(pairs: list[tuple[np.ndarray, np.ndarray]], best: DiscView, best_sc
     steps = (step_px, step_px, 10.0, 10.0, 0.5)
     if face_on:
         x0, steps = x0[:2], steps[:2]
-    simplex = [x0] + [x0 + np.eye(len(x0))[i] * size for i, size in enumerate(steps)]
-    found = minimize(lambda x: -view_score(pairs, unpack(x), lags), x0, method="Nelder-Mead",
-                     options={"initial_simplex": simplex, "xatol": 0.3, "fatol": 5e-4, "maxfev": budget})
-    if -found.fun > best_score:
-        return unpack(found.x), float(-found.fun)
-    return best, best_score
+    score, x = best_score, x0
+    for _ in range(RESTARTS):  # a simplex search restarted where it stopped: its first can stall
+        simplex = [x] + [x + np.eye(len(x))[i] * size for i, size in enumerate(steps)]
+        found = minimize(lambda x: -view_score(pairs, unpack(x), lags), x, method="Nelder-Mead",
+                         options={"initial_simplex": simplex, "xatol": 0.3, "fatol": 5e-4, "maxfev": budget})
+        if not -found.fun > score + 1e-3:
+            break
+        score, x = float(-found.fun), found.x
+    return (unpack(x), score) if score > best_score else (best, best_score)

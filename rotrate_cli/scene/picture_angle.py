@@ -210,22 +210,20 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
     first = about[0] if about else elsewhere[0]
     if elsewhere and elsewhere[0].score >= CLEARLY_BETTER * first.score:
         first = elsewhere[0]
-    taken = _through(changes, first.view)
-    rivals = [candidate for candidate in views if candidate is not first]
-    if taken is None:  # the view taken tells no rate: the next best, if any does
-        for candidate in rivals:
-            taken = _through(changes, candidate.view)
-            if taken is not None:
-                first = candidate
-                break
-        if taken is None:
+    pool = [first] + [candidate for candidate in views
+                      if candidate is not first and candidate.score >= NEARLY_AS_WELL * first.score]
+    readings = [angle for candidate in pool if (angle := _through(changes, candidate.view)) is not None]
+    if not readings:  # the views taken tell no rate: the next best that does
+        rest = (_through(changes, candidate.view) for candidate in views if candidate not in pool)
+        readings = [next((angle for angle in rest if angle is not None), None)]
+        if readings[0] is None:
             return None
-    low, high = taken.omega_low_rad_s, taken.omega_high_rad_s
-    for candidate in views:
-        if candidate is not first and candidate.score >= NEARLY_AS_WELL * first.score:
-            other = _through(changes, candidate.view)
-            if other is not None:
-                low, high = min(low, other.omega_low_rad_s), max(high, other.omega_high_rad_s)
+    # of views that line the picture up nearly alike, the one through which its changes line up
+    # best over the whole clip (the wheel tilted 38 degrees scored 0.48 against 0.47 face on, but
+    # its changes lined up at 0.38 against 0.65, and it read -16% against +0.6%)
+    taken = max(readings, key=lambda angle: angle.score)
+    low = min(angle.omega_low_rad_s for angle in readings)
+    high = max(angle.omega_high_rad_s for angle in readings)
     return replace(taken, omega_low_rad_s=low, omega_high_rad_s=high, view=taken.view.scaled(1.0 / scale))
 
 
