@@ -23,7 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.scoring import SCORE_HEADER, only_option, score_columns, scored  # noqa: E402
+from benchmarks.scoring import SCORE_HEADER, finish, only_option, score_columns, scored  # noqa: E402
 from rotrate_cli.video.rotor import RotorScene, rotor_truth, write_rotor_clip  # noqa: E402
 
 OUT = ROOT / "bench_out" / "turning"
@@ -79,10 +79,8 @@ def main() -> int:
               f"{score_columns(row)}  {time.perf_counter() - started:.1f} s")
         if row["quality"] == "good" and (error > WITHIN or not row["covers"]):
             misses.append(f"{case.name}: {float(row['error_pct']):+.2f}%, covers {row['covers']}, good")
-    print(f"\ncases {rows}; within {WITHIN:.1%}: {within}; good but off or its interval missing: {len(misses)}")
-    for miss in misses:
-        print(f"  {miss}")
-    return 1 if misses else 0
+    return finish(f"cases {rows}; within {WITHIN:.1%}: {within}; good but off or its interval missing: {len(misses)}",
+                  misses)
 
 
 if __name__ == "__main__":

@@ -83,3 +83,12 @@ def summary(rows: list[dict[str, object]]) -> tuple[str, bool]:
             f"good {len(good)} (covering {sum(bool(r['covers']) for r in good)}); off by more than "
             f"{100 * UNMARKED_LIMIT:.0f}% and not marked weak {unmarked}; sense wrong {wrong}")
     return line, unmarked == 0 and wrong == 0 and covered == len(rows)
+
+
+def finish(summary: str, misses: list[str]) -> int:
+    """Print a benchmark's summary line and each case that missed its target; the exit code (1
+    when any missed)."""
+    print(f"\n{summary}")
+    for miss in misses:
+        print(f"  {miss}")
+    return 1 if misses else 0
