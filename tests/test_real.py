@@ -340,3 +340,16 @@ def test_the_wheels_windows_shorter_than_a_turn_are_read_from_the_pictures_turni
     held = (windows["omega_low_rad_s"] <= truth["omega"]) & (truth["omega"] <= windows["omega_high_rad_s"])
     assert held.mean() >= 0.9
     assert ((windows["omega_rad_s"] / truth["omega"] - 1).abs() <= 0.02).mean() >= 0.8
+
+
+def test_a_third_of_the_wheels_turn_with_no_point_tracked_is_read_from_the_picture() -> None:
+    """0.3 of a turn of the wheel (0.3-1.13 s), the axis found: no point could be tracked (the
+    spokes blur, the rim is plain) and there was no result. The picture's own turning needs no
+    track (issue 49): a result, its interval holding the truth."""
+    clip = VIDEOS / "bicycle_wheel_frontal.mp4"
+    need(clip, "the bicycle wheel video")
+    truth = json.loads(clip.with_suffix(".truth.json").read_text())
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None, start_s=0.3, end_s=0.3 + 0.3 * 2 * math.pi / 2.27298))
+    assert analysis.rate_from == "turning" and analysis.tracks_used == 0
+    assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
+    assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.05)
