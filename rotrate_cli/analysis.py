@@ -47,7 +47,7 @@ from rotrate_cli.stages.fits import (
 from rotrate_cli.stages.geometry import Geometry, locate, measure
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
 from rotrate_cli.stages.tracks import Footage, NothingTracked, ProgressCallback, read_footage
-from rotrate_cli.stages.verdict import Verdict, judge, turns_between
+from rotrate_cli.stages.verdict import MIN_TRACKS, WEAK_HALF_WIDTH, Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
 from rotrate_cli.stages.windows import AngleWindows, judged_series
 from rotrate_cli.tracking.steady import CameraPath, Shake
@@ -291,6 +291,11 @@ def _picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFra
         view = view_from_paths(view_tracks, rate) if math.isfinite(rate) else None
         if view is not None and not not_side_view(view, view_tracks):
             return None  # seen from the side (as the paths tell) the picture does not turn
+        if view is not None and view.elevation_deg < NEARER_SIDE_DEG and _tracks_hold(tracks):
+            # nearer the side than face on, and the tracks agree closely: the paper's own case, where
+            # the picture turns little (a cylinder seen from 15 degrees above: a search of 10 s
+            # that found no plane)
+            return None
     # (no track at all tells no view: the picture's own changes are the only evidence)
     width = footage.info.width_px
     kept = footage.pairs.angle_frames.frames
@@ -303,6 +308,20 @@ def _picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFra
         start = DiscView(centre, 0.0, 0.0, float(width))
     return measure_angle(kept, start, width, search_tilt=view is None,
                          search_centre=view is None and geometry.fixation_found)
+
+
+#: A view whose axis lies nearer the image plane than this (degrees out of it, as the paths tell)
+#: is the tracks' where they agree (:func:`_tracks_hold`): the picture's angle is not sought there.
+NEARER_SIDE_DEG = 45.0
+
+
+def _tracks_hold(tracks: Combined | None) -> bool:
+    """True where the tracks' rate is good evidence by the verdict's rules: enough tracks, and an
+    interval within :data:`rotrate_cli.stages.verdict.WEAK_HALF_WIDTH` of it."""
+    if tracks is None or tracks.tracks_used < MIN_TRACKS or not 0 < tracks.omega_rad_s < math.inf:
+        return False
+    half = max(tracks.omega_rad_s - tracks.omega_low_rad_s, tracks.omega_high_rad_s - tracks.omega_rad_s)
+    return half <= WEAK_HALF_WIDTH * tracks.omega_rad_s
 
 
 def _angle_windows(footage: Footage, angle: Callable[[], PictureAngle | None]) -> AngleWindows:

@@ -325,6 +325,7 @@ def test_the_record_s_windows_and_features_agree_with_its_return() -> None:
     assert "slides" in set(analysis.features["reason"])
 
 
+@pytest.mark.slow  # about 10 s: in make test-slow
 def test_the_wheels_windows_shorter_than_a_turn_are_read_from_the_pictures_turning() -> None:
     """omega(t) in 2 s windows of a wheel that comes back every 2.8 s: no window holds a return,
     and its tracks slide (14 of 44 windows held the truth). The picture's own angle in each window
@@ -342,6 +343,7 @@ def test_the_wheels_windows_shorter_than_a_turn_are_read_from_the_pictures_turni
     assert ((windows["omega_rad_s"] / truth["omega"] - 1).abs() <= 0.02).mean() >= 0.8
 
 
+@pytest.mark.slow  # about 10 s: in make test-slow
 def test_a_third_of_the_wheels_turn_with_no_point_tracked_is_read_from_the_picture() -> None:
     """0.3 of a turn of the wheel (0.3-1.13 s), the axis found: no point could be tracked (the
     spokes blur, the rim is plain) and there was no result. The picture's own turning needs no
