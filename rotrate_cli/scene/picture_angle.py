@@ -212,12 +212,7 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
         first = elsewhere[0]
     pool = [first] + [candidate for candidate in views
                       if candidate is not first and candidate.score >= NEARLY_AS_WELL * first.score]
-    # where the views left open lie apart, the axis's point is that uncertain: each reading's
-    # interval holds a move of the centre by as much (the record's found axis: three views 27 px
-    # apart, all reading 6-24% fast, and an interval missing the truth before)
-    apart_px = max((math.dist(a.view.centre_px, b.view.centre_px) for a in pool for b in pool), default=0.0)
-    readings = [angle for candidate in pool
-                if (angle := _through(changes, candidate.view, apart_px)) is not None]
+    readings = [angle for candidate in pool if (angle := _through(changes, candidate.view)) is not None]
     if not readings:  # the views taken tell no rate: the next best that does
         rest = (_through(changes, candidate.view) for candidate in views if candidate not in pool)
         readings = [next((angle for angle in rest if angle is not None), None)]
@@ -232,9 +227,8 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
     return replace(taken, omega_low_rad_s=low, omega_high_rad_s=high, view=taken.view.scaled(1.0 / scale))
 
 
-def _through(changes: list[_Change], view: DiscView, centre_px: float = 0.0) -> PictureAngle | None:
-    """The angle and rate through ``view`` (the reduced frames' pixels), its interval holding a move
-    of the view's centre by ``centre_px`` at least (see :func:`_view_spread`); None where it tells none."""
+def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
+    """The angle and rate through ``view`` (the reduced frames' pixels); None where it tells none."""
     if view.tilt_deg > MOST_TILT_DEG or view.focal_px < SHORTEST_FOCAL * changes[0].first.shape[1]:
         return None  # a plane edge on (a side view: its picture does not turn), or no lens a camera has
     chain = _chain(changes, view, ANGLES, RINGS)
@@ -248,7 +242,7 @@ def _through(changes: list[_Change], view: DiscView, centre_px: float = 0.0) -> 
     rate, scatter = _long_rate(changes, view, times, angles, ANGLES, RINGS)
     if not math.isfinite(rate):
         return None
-    spread = _view_spread(changes, view, times, angles, centre_px)
+    spread = _view_spread(changes, view, times, angles)
     half = 1.96 * scatter + spread
     if not half < LOOSEST * abs(rate):
         return None  # a rate the picture does not hold to within half itself tells nothing
@@ -381,16 +375,15 @@ def _rate_of(changes: list[_Change], unrolled_changes: list[np.ndarray], weight:
     return slope, error * math.sqrt(len(rows) / len(chained))
 
 
-def _view_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angles_deg: np.ndarray,
-                 centre_px: float = 0.0) -> float:
+def _view_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angles_deg: np.ndarray) -> float:
     """How far the rate moves (degrees a second) when the view is varied within what part of a
     turn tells of it: the lens halved and doubled, the tilt by :data:`TILT_VARIED_DEG` (either
     way, or about two directions where the plane faces the camera), the axis's point by
-    :data:`CENTRE_VARIED` of the picture's width either way, or ``centre_px`` where more (measured
-    coarsely, against the same measure through the view found)."""
+    :data:`CENTRE_VARIED` of the picture's width either way (measured coarsely, against the same
+    measure through the view found)."""
     coarse = (256, 64)
     base, _ = _long_rate(changes, view, times, angles_deg, *coarse)
-    step = max(CENTRE_VARIED * changes[0].first.shape[1], centre_px)
+    step = CENTRE_VARIED * changes[0].first.shape[1]
     x, y = view.centre_px
     varied = [replace(view, focal_px=view.focal_px * 0.5), replace(view, focal_px=view.focal_px * 2.0),
               replace(view, centre_px=(x + step, y)), replace(view, centre_px=(x - step, y)),
