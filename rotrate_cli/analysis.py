@@ -387,6 +387,9 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         period = turns_between(period, tracks_rate, combined.tracks_used)
     verdict = judge(tracks_rate, period, combined.tracks_used, checked.doubts,
                     turning=lambda: _picture_turning(footage, geometry, view_tracks, period), angle=angle)
+    if verdict.rate_from == "turning" and measured.get("angle") is not None:
+        # the axis the rate was measured about: the picture's turning's, not the tracks'
+        geometry = replace(geometry, fixation_px=measured["angle"].view.centre_px)  # type: ignore[union-attr]
     features, tracks_used = result.features, combined.tracks_used
     if verdict.rate_from in ("repetition", "turning"):  # the tracks shown as used are those that agree with it
         features = against_rate(features, verdict.omega_rad_s)

@@ -215,3 +215,19 @@ def test_the_running_rate_of_pictures_is_measured_as_the_headline() -> None:
     assert running["omega_rad_s"].iloc[-1] == pytest.approx(analysis.omega_rad_s, rel=1e-3)
     flat = running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection))
     assert abs(flat["omega_rad_s"].iloc[-1] / analysis.omega_rad_s - 1) > 0.01  # what it showed before
+
+
+def test_a_label_s_outline_is_as_long_as_its_letters() -> None:
+    """OpenCV 5 spaces a thick line's letters wider than a thin one's: an outline drawn 3 px thick
+    ran past the letters and read as doubled ("rejectedd"). The outline lies within a pixel or two
+    of the letters on any OpenCV (issue 50, item 6)."""
+    import numpy as np
+
+    from rotrate_cli.output.overlay import TEXT_COLOUR, _label
+
+    image = np.full((60, 300, 3), 128, dtype=np.uint8)
+    _label(image, "rejected 165.5", (10, 35), 0.6)
+    dark = np.flatnonzero((image < 60).all(axis=2).any(axis=0))
+    light = np.flatnonzero((np.abs(image.astype(int) - TEXT_COLOUR).sum(axis=2) < 60).any(axis=0))
+    assert len(dark) and len(light)
+    assert abs(int(dark.max()) - int(light.max())) <= 2 and abs(int(dark.min()) - int(light.min())) <= 2

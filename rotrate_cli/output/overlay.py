@@ -90,8 +90,13 @@ def draw_axis(image: np.ndarray, point_px: tuple[float, float], angle_deg: float
 
 
 def _label(image: np.ndarray, text: str, origin: tuple[int, int], scale: float) -> None:
-    """Text with a dark outline, readable on any background."""
-    cv2.putText(image, text, origin, cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), 3, cv2.LINE_AA)
+    """Text with a dark outline, readable on any background. The outline is the text itself, one
+    pixel thick, drawn one pixel off all round: OpenCV 5 spaces a thicker line's letters wider
+    (a 3-pixel "rejected" ran 4 px longer than a 1-pixel one), so an outline drawn thick read as
+    doubled letters ("rejectedd")."""
+    x, y = origin
+    for dx, dy in ((-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)):
+        cv2.putText(image, text, (x + dx, y + dy), cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), 1, cv2.LINE_AA)
     cv2.putText(image, text, origin, cv2.FONT_HERSHEY_SIMPLEX, scale, TEXT_COLOUR, 1, cv2.LINE_AA)
 
 
