@@ -25,13 +25,13 @@ from rotrate_cli.fitting.series import rate_series
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.runtime.pools import pipeline_threads
-from rotrate_cli.scene.disc import DiscView
 from rotrate_cli.scene.focal import FocalEstimate
-from rotrate_cli.scene.picture_angle import PictureAngle, measure_angle, window_rates
+from rotrate_cli.scene.picture_angle import PictureAngle
 from rotrate_cli.scene.reasons import against_rate, name_rejections, track_places
 from rotrate_cli.scene.sense import not_side_view, sense_of_turning
 from rotrate_cli.scene.turning import PictureTurning, picture_turning
 from rotrate_cli.scene.view import View, keep_for_view, view_from_paths
+from rotrate_cli.stages.angle import angle_windows, picture_angle
 from rotrate_cli.stages.bodies import measure_bodies
 from rotrate_cli.stages.camera import lens_from, method_name
 from rotrate_cli.stages.checks import Checked, check_rate
@@ -47,9 +47,9 @@ from rotrate_cli.stages.fits import (
 from rotrate_cli.stages.geometry import Geometry, locate, measure
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
 from rotrate_cli.stages.tracks import Footage, NothingTracked, ProgressCallback, read_footage
-from rotrate_cli.stages.verdict import MIN_TRACKS, WEAK_HALF_WIDTH, Verdict, judge, turns_between
+from rotrate_cli.stages.verdict import Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
-from rotrate_cli.stages.windows import AngleWindows, judged_series
+from rotrate_cli.stages.windows import judged_series
 from rotrate_cli.tracking.steady import CameraPath, Shake
 
 __all__ = ["Analysis", "AnalysisConfig", "ProgressCallback", "analyze", "analyze_tracks", "rates_from_offsets",
@@ -278,65 +278,6 @@ def _picture_turning(footage: Footage, geometry: Geometry, view_tracks: pd.DataF
     return picture_turning(footage.pairs.pairs, view.centre_px, footage.info.width_px, rate, ellipse)
 
 
-def _picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFrame | None,
-                   tracks: Combined | None) -> PictureAngle | None:
-    """The picture's own turning angle (:mod:`rotrate_cli.scene.picture_angle`), where the picture
-    can turn: not in a side view as the tracks' paths tell it (where they tell no view, the
-    picture's own changes decide: an edge-on plane is no measurement). Its plane's view is sought
-    from the tracks' paths' (their centre and ellipse, at the tracks' rate) where they tell one,
-    else from the fixation, every tilt tried."""
-    rate = tracks.omega_rad_s if tracks is not None and 0 < tracks.omega_rad_s < math.inf else math.nan
-    view = None
-    if view_tracks is not None and len(view_tracks) > 0:
-        view = view_from_paths(view_tracks, rate) if math.isfinite(rate) else None
-        if view is not None and not not_side_view(view, view_tracks):
-            return None  # seen from the side (as the paths tell) the picture does not turn
-        if view is not None and view.elevation_deg < NEARER_SIDE_DEG and _tracks_hold(tracks):
-            # nearer the side than face on, and the tracks agree closely: the paper's own case, where
-            # the picture turns little (a cylinder seen from 15 degrees above: a search of 10 s
-            # that found no plane)
-            return None
-    # (no track at all tells no view: the picture's own changes are the only evidence)
-    width = footage.info.width_px
-    kept = footage.pairs.angle_frames.frames
-    if view is not None:
-        start = DiscView(view.centre_px, view.across_deg, 90.0 - view.elevation_deg, float(width))
-    else:
-        centre = geometry.fixation_px
-        if not (math.isfinite(centre[0]) and math.isfinite(centre[1])):
-            centre = (width / 2.0, footage.info.height_px / 2.0)
-        start = DiscView(centre, 0.0, 0.0, float(width))
-    return measure_angle(kept, start, width, search_tilt=view is None,
-                         search_centre=view is None and geometry.fixation_found)
-
-
-#: A view whose axis lies nearer the image plane than this (degrees out of it, as the paths tell)
-#: is the tracks' where they agree (:func:`_tracks_hold`): the picture's angle is not sought there.
-NEARER_SIDE_DEG = 45.0
-
-
-def _tracks_hold(tracks: Combined | None) -> bool:
-    """True where the tracks' rate is good evidence by the verdict's rules: enough tracks, and an
-    interval within :data:`rotrate_cli.stages.verdict.WEAK_HALF_WIDTH` of it."""
-    if tracks is None or tracks.tracks_used < MIN_TRACKS or not 0 < tracks.omega_rad_s < math.inf:
-        return False
-    half = max(tracks.omega_rad_s - tracks.omega_low_rad_s, tracks.omega_high_rad_s - tracks.omega_rad_s)
-    return half <= WEAK_HALF_WIDTH * tracks.omega_rad_s
-
-
-def _angle_windows(footage: Footage, angle: Callable[[], PictureAngle | None]) -> AngleWindows:
-    """omega(t) per window from the picture's own angle (measured here if the verdict did not),
-    for :func:`rotrate_cli.stages.windows.judged_series`."""
-
-    def rates(centres_s: np.ndarray, window_s: float) -> list[tuple[float, float, float] | None]:
-        measured = angle()
-        if measured is None:
-            return [None] * len(centres_s)
-        return window_rates(footage.pairs.angle_frames.frames, measured, footage.info.width_px, centres_s, window_s)
-
-    return rates
-
-
 def _angle_guess(footage: Footage, config: AnalysisConfig) -> float:
     """The axis's angle before the geometry stage: for the paper's sample spacing."""
     if config.axis_angle_deg is not None:
@@ -373,13 +314,13 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
 
     def measured_angle() -> PictureAngle | None:  # once, for the verdict and omega(t)
         if "angle" not in measured:
-            measured["angle"] = _picture_angle(footage, geometry, view_tracks, tracks_rate)
+            measured["angle"] = picture_angle(footage, geometry, view_tracks, tracks_rate)
         return measured["angle"]
 
     angle: PictureAngle | None | Callable[[], PictureAngle | None] = measured_angle
     if combined.tracks_used == 0 and period is None:
         # no track and no return: the picture's own turning alone, where it tells a rate
-        angle = _picture_angle(footage, geometry, view_tracks, None) if config.method == "fit" else None
+        angle = picture_angle(footage, geometry, view_tracks, None) if config.method == "fit" else None
         if angle is None:
             raise NoResultError(no_result_message(result.features))
         measured["angle"] = angle
@@ -397,7 +338,7 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     if isinstance(extra.get("series"), pd.DataFrame):
         extra["series"] = judged_series(extra["series"], verdict, footage.thumbnails,  # type: ignore[arg-type]
                                         footage.info.clock_resolution_s, config.window_s or 0.0,
-                                        _angle_windows(footage, measured_angle))
+                                        angle_windows(footage, measured_angle))
     footage.pairs.clear()
     size_px = (footage.info.width_px, footage.info.height_px)
     direction, in_picture = result.direction, False

@@ -15,7 +15,9 @@ list of their calls.
 6. :mod:`~rotrate_cli.stages.checks`: every doubt about the tracks' rate, in one place ->
    :class:`~rotrate_cli.stages.checks.Checked`.
 7. :mod:`~rotrate_cli.stages.verdict`: the tracks' rate and the period weighed ->
-   :class:`~rotrate_cli.stages.verdict.Verdict` (the reported rate, ``good``/``weak``).
+   :class:`~rotrate_cli.stages.verdict.Verdict` (the reported rate, ``good``/``weak``), with the
+   picture's own turning angle (:mod:`~rotrate_cli.stages.angle`) asked for where the picture does
+   not come back, or the count of its returns a turn is open.
 8. :mod:`~rotrate_cli.stages.view_at_rate`: after the verdict, the view read from the paths at
    the reported rate (it needs the rate), and on a repetition-rated face-on body, the axis.
 

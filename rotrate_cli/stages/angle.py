@@ -1,0 +1,80 @@
+"""The picture's own turning angle as a stage: where it is sought (not in the tracks' side view),
+from which view of the plane, and omega(t) from it per window. The measurement itself is
+:mod:`rotrate_cli.scene.picture_angle`; the verdict weighs it (:mod:`rotrate_cli.stages.verdict`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from rotrate_cli.fitting.outliers import Combined
+from rotrate_cli.runtime.lazy import pandas as pd
+from rotrate_cli.scene.disc import DiscView
+from rotrate_cli.scene.picture_angle import PictureAngle, measure_angle, window_rates
+from rotrate_cli.scene.sense import not_side_view
+from rotrate_cli.scene.view import view_from_paths
+from rotrate_cli.stages.geometry import Geometry
+from rotrate_cli.stages.tracks import Footage
+from rotrate_cli.stages.verdict import MIN_TRACKS, WEAK_HALF_WIDTH
+from rotrate_cli.stages.windows import AngleWindows
+
+
+def picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFrame | None,
+                  tracks: Combined | None) -> PictureAngle | None:
+    """The picture's own turning angle (:mod:`rotrate_cli.scene.picture_angle`), where the picture
+    can turn: not in a side view as the tracks' paths tell it (where they tell no view, the
+    picture's own changes decide: an edge-on plane is no measurement). Its plane's view is sought
+    from the tracks' paths' (their centre and ellipse, at the tracks' rate) where they tell one,
+    else from the fixation, every tilt tried."""
+    rate = tracks.omega_rad_s if tracks is not None and 0 < tracks.omega_rad_s < math.inf else math.nan
+    view = None
+    if view_tracks is not None and len(view_tracks) > 0:
+        view = view_from_paths(view_tracks, rate) if math.isfinite(rate) else None
+        if view is not None and not not_side_view(view, view_tracks):
+            return None  # seen from the side (as the paths tell) the picture does not turn
+        if view is not None and view.elevation_deg < NEARER_SIDE_DEG and _tracks_hold(tracks):
+            # nearer the side than face on, and the tracks agree closely: the paper's own case, where
+            # the picture turns little (a cylinder seen from 15 degrees above: a search of 10 s
+            # that found no plane)
+            return None
+    # (no track at all tells no view: the picture's own changes are the only evidence)
+    width = footage.info.width_px
+    kept = footage.pairs.angle_frames.frames
+    if view is not None:
+        start = DiscView(view.centre_px, view.across_deg, 90.0 - view.elevation_deg, float(width))
+    else:
+        centre = geometry.fixation_px
+        if not (math.isfinite(centre[0]) and math.isfinite(centre[1])):
+            centre = (width / 2.0, footage.info.height_px / 2.0)
+        start = DiscView(centre, 0.0, 0.0, float(width))
+    return measure_angle(kept, start, width, search_tilt=view is None,
+                         search_centre=view is None and geometry.fixation_found)
+
+
+#: A view whose axis lies nearer the image plane than this (degrees out of it, as the paths tell)
+#: is the tracks' where they agree (:func:`_tracks_hold`): the picture's angle is not sought there.
+NEARER_SIDE_DEG = 45.0
+
+
+def _tracks_hold(tracks: Combined | None) -> bool:
+    """True where the tracks' rate is good evidence by the verdict's rules: enough tracks, and an
+    interval within :data:`rotrate_cli.stages.verdict.WEAK_HALF_WIDTH` of it."""
+    if tracks is None or tracks.tracks_used < MIN_TRACKS or not 0 < tracks.omega_rad_s < math.inf:
+        return False
+    half = max(tracks.omega_rad_s - tracks.omega_low_rad_s, tracks.omega_high_rad_s - tracks.omega_rad_s)
+    return half <= WEAK_HALF_WIDTH * tracks.omega_rad_s
+
+
+def angle_windows(footage: Footage, angle: Callable[[], PictureAngle | None]) -> AngleWindows:
+    """omega(t) per window from the picture's own angle (measured here if the verdict did not),
+    for :func:`rotrate_cli.stages.windows.judged_series`."""
+
+    def rates(centres_s: np.ndarray, window_s: float) -> list[tuple[float, float, float] | None]:
+        measured = angle()
+        if measured is None:
+            return [None] * len(centres_s)
+        return window_rates(footage.pairs.angle_frames.frames, measured, footage.info.width_px, centres_s, window_s)
+
+    return rates
