@@ -185,13 +185,15 @@ def shift_deg(correlation: np.ndarray, near_deg: float | None = None, within_deg
     return float(shifts[index] + step * 360.0 / count), float(at)
 
 
-def second_peak(correlation: np.ndarray, best_deg: float, apart_deg: float) -> float:
-    """The highest correlation more than ``apart_deg`` from ``best_deg`` (another shift that fits)."""
+def second_peak(correlation: np.ndarray, best_deg: float, apart_deg: float) -> tuple[float, float]:
+    """The other shift that fits best, more than ``apart_deg`` from ``best_deg`` (degrees, in
+    (-180, 180]), and its correlation (-1 where there is none)."""
     count = len(correlation)
-    shifts = np.arange(count) * (360.0 / count)
+    shifts = (np.arange(count) * (360.0 / count) + 180.0) % 360.0 - 180.0
     off = np.abs((shifts - best_deg + 180.0) % 360.0 - 180.0)
-    others = correlation[off > apart_deg]
-    return float(others.max()) if others.size else -1.0
+    others = np.where(off > apart_deg, correlation, -np.inf)
+    index = int(np.argmax(others))
+    return (float(shifts[index]), float(others[index])) if np.isfinite(others[index]) else (best_deg, -1.0)
 
 
 def view_score(pairs: list[tuple[np.ndarray, np.ndarray]], view: DiscView, lags: tuple[int, ...],

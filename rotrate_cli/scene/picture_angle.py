@@ -313,8 +313,8 @@ def _first_rate(changes: list[_Change], unrolled_changes: list[np.ndarray], weig
         correlation = ring_correlation(unrolled_changes[int(i)], unrolled_changes[k], weight)
         shift, height = shift_deg(correlation)
         apart = max(5.0, 0.5 * abs(shift))
-        other = (_other_shift(correlation, shift, apart)
-                 if second_peak(correlation, shift, apart) >= ALIKE_PEAK * height else None)
+        other_shift, other_height = second_peak(correlation, shift, apart)
+        other = other_shift if other_height >= ALIKE_PEAK * height else None
         found.append((shift / (changes[k].time_s - changes[int(i)].time_s), shift, other))
     if not found:
         return 0.0, 0.0, None
@@ -329,13 +329,6 @@ def _recent_rate(points: list[tuple[float, float]]) -> float | None:
     does not lead the next astray."""
     slopes = [(b - a) / (tb - ta) for i, (ta, a) in enumerate(points) for tb, b in points[i + 1:] if tb > ta]
     return float(np.median(slopes)) if slopes else None
-
-
-def _other_shift(correlation: np.ndarray, best_deg: float, apart_deg: float) -> float:
-    count = len(correlation)
-    shifts = (np.arange(count) * (360.0 / count) + 180.0) % 360.0 - 180.0
-    off = np.abs((shifts - best_deg + 180.0) % 360.0 - 180.0)
-    return float(shifts[int(np.argmax(np.where(off > apart_deg, correlation, -np.inf)))])
 
 
 def _long_rate(changes: list[_Change], view: DiscView, times: np.ndarray, angles_deg: np.ndarray, angles: int,
