@@ -66,8 +66,9 @@ def _rate_from_text(analysis: Analysis) -> str:
         turn = "; a turn or a part of one: nothing tells"
     else:
         turn = f"; {'a turn' if per_turn == 1 else f'{per_turn} repeats a turn'}, as {told} tells"
+    slow = "; found once the picture's slow change was taken out" if period.detrended else ""
     return (f"the clip's repetition: the picture repeats every {period.period_s:.4g} s "
-            f"(seen {period.repeats} time(s){turn})")
+            f"(seen {period.repeats} time(s){turn}{slow})")
 
 
 def _number(value: float, digits: int = 6) -> float | None:
@@ -161,6 +162,7 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "likeness": _number(analysis.period.likeness, 4),
             "far_apart": analysis.period.far_apart,
             "turns_between": analysis.period.turns_between,
+            "detrended": analysis.period.detrended,
         },
         "shake": None if analysis.shake is None else {
             "rms_px": _number(analysis.shake.rms_px, 3), "largest_px": _number(analysis.shake.largest_px, 3),

@@ -21,6 +21,13 @@ gives the period from the few pairs across the wrap, to a fraction of a frame.
 Times are the frames' own (:attr:`rotrate_cli.video.decode.Frame.time_s`): photographs taken at
 irregular moments of a steadily turning table are placed by their capture times.
 
+A return buried in slow change (light through a window swinging across the picture, rain on the
+glass, a camera drifting a few pixels) is no return by the frames' plain differences: the pairs
+a turn apart differ by everything that changed slowly between them. Any filter applied alike at
+every moment keeps a picture that repeats repeating, so where nothing is found the search is made
+again on the frames less their running mean over :data:`DETREND_FRAMES` (:func:`_detrended`),
+which keeps the turn's quick change and leaves out the slow one.
+
 An object with an m-fold symmetry (a fan's blades, spokes) repeats m times a turn; the period
 found is then a fraction of the turn, which the return alone cannot tell: the tracks' rate or the
 picture's own turning tell which (:func:`rotrate_cli.stages.verdict.tell_repeats`).
@@ -85,6 +92,14 @@ MAX_PAIRS = 30_000
 #: the truth (seq18: 0.56, whose interval at a floor of 0.4 missed it by 0.04%).
 RESOLUTION_STEPS = 0.6
 
+#: Where the plain search finds no return, each pixel's running mean over this many frames is
+#: taken out and the search made again: longer than the picture's own change from frame to frame
+#: (the neighbours the fit reads, up to :data:`MAX_NEIGHBOURS` each side), shorter than a light or
+#: a drift that changes over seconds. A record seen nearly edge on (80 degrees), the light swinging
+#: across the picture, drops running down the glass, a 4-pixel drift: no return plainly; over 15
+#: frames, -0.04% (5 frames kept too little of the turn, 25 too much of the weather).
+DETREND_FRAMES = 2 * MAX_NEIGHBOURS - 1
+
 
 @dataclass(frozen=True)
 class Period:
@@ -114,6 +129,7 @@ class Period:
             alike after 88 frames, 7 turns.
         turns_between: how many repeats the closest return first seen spans, as taken
             (:meth:`over`; 1 until then).
+        detrended: found only once the slow change was taken out (:data:`DETREND_FRAMES`).
     """
 
     period_s: float
@@ -129,6 +145,7 @@ class Period:
     far_apart: bool = False
     turns_guess: int = 1
     turns_between: int = 1
+    detrended: bool = False
 
     def over(self, turns: int) -> Period:
         """The repetition where the closest return spans ``turns`` repeats."""
@@ -310,6 +327,31 @@ def find_period(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: flo
 
     ``times_s``: each frame's time; ``images``: one row of thumbnail pixels per frame;
     ``clock_resolution_s``: how finely the times are known (widens the interval).
+
+    Searched on the frames as they are, then, where that finds nothing, on the frames less their
+    slow change (:func:`_detrended`).
+    """
+    found = _search(times_s, images, clock_resolution_s)
+    if found is not None or len(times_s) < 4 * DETREND_FRAMES:
+        return found
+    times_s, images = _detrended(times_s, images)
+    found = _search(times_s, images, clock_resolution_s)
+    return None if found is None else replace(found, detrended=True)
+
+
+def _detrended(times_s: np.ndarray, images: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each pixel less its running mean over :data:`DETREND_FRAMES` frames centred on it (float32;
+    the frames at the ends, without a whole window, left out), with the kept frames' times."""
+    width = DETREND_FRAMES
+    total = np.zeros((len(images) + 1, images.shape[1]), np.float32)
+    np.cumsum(images, axis=0, dtype=np.float32, out=total[1:])
+    means = (total[width:] - total[:-width]) / width
+    half = width // 2
+    return times_s[half:half + len(means)], images[half:half + len(means)].astype(np.float32) - means
+
+
+def _search(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float) -> Period | None:
+    """The repetition in one set of thumbnails (see :func:`find_period`).
 
     Every valley of the lag profile (and the closing of a single turn) is fitted; the period is
     the shortest of those whose pictures match nearly as well as the best match: a turned car

@@ -42,6 +42,9 @@ class RotorScene:
         noise: sensor noise, grey levels (standard deviation).
         texture: how much fine texture the rotor carries, 0 (flat paint: only its edges show)
             to 1.
+        weather: slow change over the whole picture, as through a window on a rainy day (0: none,
+            1: the light across the picture swinging by a third, drops running down the glass,
+            the camera drifting 4 pixels over the clip); the picture then never returns exactly.
         seed: of the textures and the noise.
     """
 
@@ -58,6 +61,7 @@ class RotorScene:
     mark: bool = False
     noise: float = 2.0
     texture: float = 1.0
+    weather: float = 0.0
     seed: int = 0
 
     @property
@@ -138,6 +142,7 @@ def rotor_frames(scene: RotorScene) -> Iterator[np.ndarray]:
     cx, cy = scene.centre
     squash = math.cos(math.radians(scene.tilt_deg))
     noise_rng = np.random.default_rng(scene.seed + 1)
+    weather = _Weather(scene, np.random.default_rng(scene.seed + 2)) if scene.weather > 0 else None
     for index in range(scene.frame_count):
         # the picture turns anticlockwise as shown for a positive rate (image rows point down)
         angle = -scene.omega_rad_s * index / scene.fps
@@ -145,14 +150,52 @@ def rotor_frames(scene: RotorScene) -> Iterator[np.ndarray]:
         # rotor square -> picture: turn about the centre, squash the rows, move to the axis
         matrix = np.array([[cos_a, -sin_a, 0.0], [squash * sin_a, squash * cos_a, 0.0]], np.float64)
         matrix[:, 2] = np.array([cx, cy]) - matrix[:, :2] @ np.array([c, c])
+        if weather is not None:
+            matrix[:, 2] += weather.drift_px(index)
         shape = (scene.width_px, scene.height_px)
         turned = cv2.warpAffine(texture, matrix, shape, flags=cv2.INTER_LINEAR, borderValue=0.0)
         covered = cv2.warpAffine(coverage, matrix, shape, flags=cv2.INTER_LINEAR, borderValue=0.0)
         grey = covered * turned + (1.0 - covered) * background
+        if weather is not None:
+            grey = weather.over(grey, index)
         if scene.noise > 0:
             grey = grey + noise_rng.normal(0.0, scene.noise, grey.shape)
         image = np.clip(np.rint(grey), 0, 255).astype(np.uint8)
         yield cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+
+
+class _Weather:
+    """Slow change laid over a rotor's frames (:attr:`RotorScene.weather`): light that swings
+    across the picture, drops that run down the glass in front of it, a camera that drifts."""
+
+    def __init__(self, scene: RotorScene, rng: np.random.Generator) -> None:
+        self.scene = scene
+        self.count = scene.frame_count
+        h, w = scene.height_px, scene.width_px
+        y, x = np.mgrid[0:h, 0:w].astype(np.float32)
+        self.across = (x / w - 0.5) + 0.5 * (y / h - 0.5)  # the light's slope across the picture
+        drops = int(round(40 * scene.weather))
+        self.drops = [(rng.uniform(0, w), rng.uniform(-h, h), rng.uniform(4, 12), rng.uniform(0.3, 1.2),
+                       rng.uniform(20, 60)) for _ in range(drops)]  # x, first y, size, speed px/frame, brightness
+        self.canvas = np.zeros((h, w), np.float32)
+
+    def drift_px(self, index: int) -> np.ndarray:
+        share = index / max(self.count - 1, 1)
+        return 4.0 * self.scene.weather * np.array([share, 0.5 * math.sin(math.pi * share)])
+
+    def over(self, grey: np.ndarray, index: int) -> np.ndarray:
+        share = index / max(self.count - 1, 1)
+        strength = self.scene.weather
+        gain = 1.0 + strength * 0.06 * math.sin(2.0 * math.pi * 0.7 * share)
+        tilt = strength * 0.35 * math.sin(2.0 * math.pi * 0.45 * share + 0.5)
+        lit = grey * (gain + tilt * self.across)
+        canvas = self.canvas
+        canvas[:] = 0.0
+        h = self.scene.height_px
+        for x, y0, size, speed, bright in self.drops:
+            y = (y0 + speed * index) % (2 * h) - 0.5 * h
+            cv2.ellipse(canvas, (int(x), int(y)), (int(size * 0.6), int(size)), 0, 0, 360, float(bright), -1)
+        return lit + cv2.GaussianBlur(canvas, (0, 0), 3.0)
 
 
 def rotor_truth(scene: RotorScene) -> dict[str, object]:
