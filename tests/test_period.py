@@ -343,3 +343,45 @@ def test_slow_change_under_a_turn_is_no_return() -> None:
                        height_px=240, radius_px=80, tilt_deg=60, weather=2.0, texture=0.3, seed=4, mark=True)
     thumbnails = _rotor_thumbnails(scene)
     assert find_period(thumbnails.times_s, thumbnails.images) is None
+
+
+def _stepping_hand(fps: float, offset_s: float, size: int = 128) -> tuple[Thumbnails, float]:
+    """A clock face whose second hand steps 3 degrees every half second (a turn in 60 s), filmed
+    for one turn at ``fps``, the first step ``offset_s`` into its hold; with the turn's time."""
+    rng = np.random.default_rng(1)
+    face = cv2.GaussianBlur(rng.uniform(0, 255, (size, size)).astype(np.float32), (0, 0), 3) * 0.3 + 150
+    c = (size - 1) / 2
+    thumbnails = Thumbnails()
+    frames = []
+    turn_s, hold_s = 60.0, 0.5
+    for index in range(int(round(turn_s * fps))):
+        time_s = index / fps
+        angle = math.radians(3.0 * math.floor((time_s + offset_s) / hold_s) - 90)
+        image = face.copy()
+        cv2.line(image, (int(c), int(c)), (int(c + 0.85 * c * math.cos(angle)), int(c + 0.85 * c * math.sin(angle))),
+                 20, 3, cv2.LINE_AA)
+        image += rng.normal(0, 1.5, image.shape)
+        frames.append(Frame(index, time_s, np.clip(image, 0, 255).astype(np.uint8)))
+    for _ in thumbnails.tap(iter(frames)):
+        pass
+    return thumbnails, turn_s
+
+
+@pytest.mark.parametrize(("fps", "offset_s"), [(25.0, 0.3), (10.0, 0.25)])
+def test_a_stepped_hand_s_single_return_is_placed_no_finer_than_its_step(fps: float, offset_s: float) -> None:
+    """Where the hand stands still between steps, its return can be placed only within the half
+    second a step is held: the interval holds that (one step is 0.83% of the turn)."""
+    thumbnails, turn_s = _stepping_hand(fps, offset_s)
+    found = find_period(thumbnails.times_s, thumbnails.images)
+    assert found is not None
+    assert found.period_low_s <= turn_s <= found.period_high_s
+    assert found.period_high_s - found.period_low_s >= 0.5 / turn_s * turn_s  # at least one step's width
+
+
+def test_a_smooth_turn_holds_no_step_and_a_stepped_one_its_own() -> None:
+    from rotrate_cli.stages.period import _differences, _hold_s
+    times = np.arange(0.0, 8.0, 1 / 23.976)
+    smooth = _turning(times, 1.7696)
+    assert _hold_s(_differences(smooth.images).diagonal(1), smooth.times_s) == 0.0
+    stepped, _ = _stepping_hand(25.0, 0.3)
+    assert _hold_s(_differences(stepped.images).diagonal(1), stepped.times_s) == pytest.approx(0.5, abs=0.05)

@@ -91,6 +91,14 @@ MAX_PAIRS = 30_000
 #: hand, and the dinosaur) timed by frame index: their single closings sit 0.00-0.56 steps from
 #: the truth (seq18: 0.56, whose interval at a floor of 0.4 missed it by 0.04%).
 RESOLUTION_STEPS = 0.6
+#: A picture that moves in steps (a clock's second hand): consecutive frames that differ by more
+#: than this many times the 30th percentile of their differences (the still ones' noise) hold a
+#: step, and where at most :data:`STEPPED_SHARE` of them do, the motion is stepped. Its repeat can
+#: be placed only to within the time a step is held: one turn of a hand stepping 3 degrees every
+#: half second, at 25 frames/s, read +0.32% within +-0.05% (the truth outside) and in the held-out
+#: clip one step early, +0.82% within +-0.07%.
+STEP_CONTRAST = 4.0
+STEPPED_SHARE = 0.5
 
 #: Where the plain search finds no return, each pixel's running mean over this many frames is
 #: taken out and the search made again: longer than the picture's own change from frame to frame
@@ -369,6 +377,7 @@ def _search(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float) 
     if not typical > 0:
         return None
     diff /= typical
+    hold_s = _hold_s(diff.diagonal(1), times_s)
     profile = _lag_profile(diff)
     reach = 1
     while reach < MAX_NEIGHBOURS and reach + 1 < count and profile[reach] < 1.0 - ALIKE * 0.8:
@@ -381,7 +390,7 @@ def _search(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float) 
                for fit in fits):
             continue
         fit = _fit_period(diff, times_s, lag0, _repeats(profile, lag0, reach), reach, clock_resolution_s,
-                          shapes_cache)
+                          shapes_cache, hold_s)
         if fit is not None:
             fits.append(fit)
     if not fits:
@@ -391,6 +400,17 @@ def _search(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float) 
     if profile[1] < FAR_APART:
         return chosen
     return replace(chosen, far_apart=True, turns_guess=_turns_between(profile, times_s, chosen.period_s))
+
+
+def _hold_s(consecutive: np.ndarray, times_s: np.ndarray) -> float:
+    """How long a stepped picture holds each step (the median time between the frames where it
+    moves, :data:`STEP_CONTRAST`), seconds; 0 for a picture that moves smoothly."""
+    if len(consecutive) < 8:
+        return 0.0
+    moves = consecutive > STEP_CONTRAST * float(np.percentile(consecutive, 30))
+    if moves.mean() > STEPPED_SHARE or moves.sum() < 3:
+        return 0.0
+    return float(np.median(np.diff(times_s[1:][moves])))
 
 
 def _turns_between(profile: np.ndarray, times_s: np.ndarray, period_s: float) -> int:
@@ -444,9 +464,11 @@ def _pairs_near(count: int, lag0: float, repeats: int, reach: int) -> tuple[np.n
 
 
 def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int, reach: int,
-                clock_resolution_s: float, shapes_cache: dict[int, np.ndarray] | None = None) -> Period | None:
+                clock_resolution_s: float, shapes_cache: dict[int, np.ndarray] | None = None,
+                hold_s: float = 0.0) -> Period | None:
     """The period near ``lag0`` frames that best predicts the differences of the pairs near its
-    first ``repeats`` multiples from their frames' neighbours (see the module's notes)."""
+    first ``repeats`` multiples from their frames' neighbours (see the module's notes); ``hold_s``:
+    how long a stepped picture holds each step (:func:`_hold_s`), which the interval holds."""
     count = len(times_s)
     step_s = float(np.mean(np.diff(times_s)))
     i, j, multiple = _pairs_near(count, lag0, repeats, reach)
@@ -523,7 +545,7 @@ def _fit_period(diff: np.ndarray, times_s: np.ndarray, lag0: float, repeats: int
     # floor for where between two frames a repeat can be placed (per repeat spanned)
     frames_involved = len(np.union1d(i, j))
     se_s = math.sqrt(2.0 * minimum / max(frames_involved, 1) / curvature) if curvature > 0 else math.inf
-    floor_s = RESOLUTION_STEPS * step_s / repeats
+    floor_s = max(RESOLUTION_STEPS * step_s, hold_s) / repeats
     clock_s = clock_resolution_s / repeats
     # a rate that changes over the clip: the pairs of its first and second halves disagree, and
     # the mean rate is known no better than half their difference
