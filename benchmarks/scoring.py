@@ -92,3 +92,32 @@ def finish(summary: str, misses: list[str]) -> int:
     for miss in misses:
         print(f"  {miss}")
     return 1 if misses else 0
+
+
+#: Each marked sample of a hand-tracked sticker counts for a part this far beyond its ends, s.
+STICKER_REACH_S = 0.1
+
+
+def sticker_omega(track_csv: Path, fps: float, start_s: float, end_s: float) -> float:
+    """The rate (rad/s) a clip's hand-tracked sticker turns at over ``start_s``-``end_s``: the slope
+    of its unwrapped angle (``mp4_frame,x_px,y_px,angle_rad_unwrapped``) over the samples within
+    the part (and :data:`STICKER_REACH_S` beyond). The wheel slows 2% over its clip: its first
+    2.5 s turn 1.06% faster than the clip's mean, which a part's truth must hold. NaN with fewer
+    than three samples."""
+    import numpy as np
+    table = np.loadtxt(track_csv, delimiter=",", skiprows=1, ndmin=2)
+    times = table[:, 0] / fps
+    inside = (times >= start_s - STICKER_REACH_S) & (times <= end_s + STICKER_REACH_S)
+    if inside.sum() < 3:
+        return float("nan")
+    return abs(float(np.polyfit(times[inside], table[inside, 3], 1)[0]))
+
+
+def part_truth(video: Path, omega_rad_s: float, fps: float, start_s: float | None, end_s: float | None) -> float:
+    """A part's truth: the rate of the clip's hand-tracked sticker over it where the clip has one
+    (``<name>.track.csv``, see :func:`sticker_omega`), else the clip's own."""
+    track = video.with_suffix(".track.csv")
+    if not track.exists() or (start_s is None and end_s is None):
+        return omega_rad_s
+    local = sticker_omega(track, fps, start_s or 0.0, end_s if end_s is not None else math.inf)
+    return local if math.isfinite(local) else omega_rad_s
