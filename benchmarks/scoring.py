@@ -96,21 +96,30 @@ def finish(summary: str, misses: list[str]) -> int:
 
 #: Each marked sample of a hand-tracked sticker counts for a part this far beyond its ends, s.
 STICKER_REACH_S = 0.1
+#: ... and the samples must reach to within this of the part's ends, s (the wheel's first is
+#: frame 5, its last frame 335: 3 s before the clip's end).
+STICKER_SLACK_S = 0.5
 
 
 def sticker_omega(track_csv: Path, fps: float, start_s: float, end_s: float) -> float:
     """The rate (rad/s) a clip's hand-tracked sticker turns at over ``start_s``-``end_s``: the slope
     of its unwrapped angle (``mp4_frame,x_px,y_px,angle_rad_unwrapped``) over the samples within
     the part (and :data:`STICKER_REACH_S` beyond). The wheel slows 2% over its clip: its first
-    2.5 s turn 1.06% faster than the clip's mean, which a part's truth must hold. NaN with fewer
-    than three samples."""
+    2.5 s turn 1.06% faster than the clip's mean, which a part's truth must hold. Where the part
+    reaches beyond the samples by more than :data:`STICKER_SLACK_S` (the wheel's last is frame
+    335, 3 s before the clip's end), or holds fewer than three, its mean rate from a steady slowing
+    fitted to them all (the angle a quadratic of time). NaN where the sticker has too few samples."""
     import numpy as np
     table = np.loadtxt(track_csv, delimiter=",", skiprows=1, ndmin=2)
-    times = table[:, 0] / fps
+    times, angles = table[:, 0] / fps, table[:, 3]
     inside = (times >= start_s - STICKER_REACH_S) & (times <= end_s + STICKER_REACH_S)
-    if inside.sum() < 3:
+    beyond = start_s < times[0] - STICKER_SLACK_S or end_s > times[-1] + STICKER_SLACK_S
+    if inside.sum() >= 3 and not beyond:
+        return abs(float(np.polyfit(times[inside], angles[inside], 1)[0]))
+    if len(times) < 4 or not math.isfinite(end_s):
         return float("nan")
-    return abs(float(np.polyfit(times[inside], table[inside, 3], 1)[0]))
+    slowing = np.poly1d(np.polyfit(times, angles, 2))
+    return abs(float(slowing(end_s) - slowing(start_s))) / (end_s - start_s)
 
 
 def part_truth(video: Path, omega_rad_s: float, fps: float, start_s: float | None, end_s: float | None) -> float:
