@@ -1,7 +1,10 @@
 """The real videos (../shared/data/real_videos) transformed as other people's footage differs:
 mirrored, turned a quarter and a half turn, at 0.6, 0.5 and 0.25 of their size, every second
-frame (at half the frame rate), played backwards, blurred with noise added, and cropped. Each
-copy has the clip's own rate in rad/s; mirrored or backwards, the other sense of turning.
+frame (at half the frame rate), played backwards, blurred with noise added, cropped, and seen by
+a camera that rolls (3 degrees a second) or wobbles in the hand (:data:`ROLLS`). Each
+copy has the clip's own rate in rad/s (the wheel's over the whole clip: it slows, and its sticker
+was tracked to frame 335 of 418, see :func:`benchmarks.scoring.part_truth`); mirrored or
+backwards, the other sense of turning.
 Default settings, ``--fixation auto``.
 
     python benchmarks/bench_variants.py             # every copy of both clips
@@ -19,6 +22,7 @@ truth, or its sense is told wrong ("unknown" is not wrong); 0 otherwise; skips (
 from __future__ import annotations
 
 import json
+import re
 import sys
 import time
 from collections.abc import Callable, Iterable, Iterator
@@ -29,7 +33,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks.scoring import footage_absent, only_option  # noqa: E402
+from benchmarks.scoring import footage_absent, only_option, part_truth  # noqa: E402
 from rotrate_cli.analysis import AnalysisConfig, analyze  # noqa: E402
 from rotrate_cli.errors import RotrateError  # noqa: E402
 
@@ -53,6 +57,36 @@ def _noisy(frames: Frames) -> Iterator[np.ndarray]:
         blurred = cv2.GaussianBlur(frame, (5, 5), 1.2).astype(np.int16)
         yield np.clip(blurred + rng.normal(0.0, 6.0, frame.shape).astype(np.int16), 0, 255).astype(np.uint8)
 
+
+#: A camera's roll laid over the clips: the picture turned about its centre (and enlarged by
+#: :data:`ROLL_ZOOM`, so that no corner shows), either steadily or as a hand's wobble.
+ROLL_ZOOM = 1.15
+
+
+def rolled_frames(deg_per_s: float, wobble: bool, fps: float) -> Callable[[Frames], Iterator[np.ndarray]]:
+    """The frames as a camera rolling ``deg_per_s`` would show them (clockwise as shown, for a
+    positive rate); ``wobble``: also a hand's shake, 1.5 degrees and 4 px at about 1 Hz with a
+    jitter, on top."""
+    def rolled(frames: Frames) -> Iterator[np.ndarray]:
+        rng = np.random.default_rng(5)
+        for index, frame in enumerate(frames):
+            time_s = index / fps
+            angle = deg_per_s * time_s
+            shift = np.zeros(2)
+            if wobble:
+                angle += 1.5 * np.sin(2 * np.pi * 0.9 * time_s) + 0.4 * np.sin(2 * np.pi * 2.3 * time_s + 1.0)
+                shift = 4.0 * np.array([np.sin(2 * np.pi * 1.1 * time_s), np.cos(2 * np.pi * 0.7 * time_s)])
+                angle += rng.normal(0.0, 0.05)
+                shift += rng.normal(0.0, 0.3, 2)
+            height, width = frame.shape[:2]
+            matrix = cv2.getRotationMatrix2D(((width - 1) / 2, (height - 1) / 2), -angle, ROLL_ZOOM)
+            matrix[:, 2] += shift
+            yield cv2.warpAffine(frame, matrix, (width, height), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    return rolled
+
+
+#: Camera rolls: name: (degrees a second, with a hand's wobble).
+ROLLS = {"rolled 3 deg/s": (3.0, False), "rolled -3 deg/s, wobbling": (-3.0, True), "wobbling": (0.0, True)}
 
 #: name: (the frames transformed, the frame rate's factor, the sense kept (+1) or turned (-1))
 VARIANTS: dict[str, tuple[Callable[[Frames], Iterable[np.ndarray]], float, int]] = {
@@ -84,8 +118,8 @@ def _frames(clip: Path) -> Iterator[np.ndarray]:
 
 def _written(clip: Path, name: str, fps: float) -> Path:
     """The transformed copy, written once."""
-    transform, fps_factor, _ = VARIANTS[name]
-    path = OUT / f"{clip.stem}_{name.replace(' ', '_').replace(',', '').replace('(', '').replace(')', '')}.mp4"
+    transform, fps_factor, _ = VARIANTS[name] if name in VARIANTS else (rolled_frames(*ROLLS[name], fps), 1.0, 1)
+    path = OUT / f"{clip.stem}_{re.sub(r'[^a-z0-9.-]+', '_', name).strip('_')}.mp4"
     if path.exists():
         return path
     OUT.mkdir(parents=True, exist_ok=True)
@@ -115,12 +149,14 @@ def main() -> int:
     for stem, sense in SENSE.items():
         clip = VIDEOS / f"{stem}.mp4"
         truth = json.loads(clip.with_suffix(".truth.json").read_text())
-        for name in ("as it is", *VARIANTS):
+        # over the whole clip: the wheel slows 2%, and its truth is its sticker's mean to frame 335 of 418
+        omega = part_truth(clip, truth["omega"], truth["fps"], 0.0, truth["frames"] / truth["fps"])
+        for name in ("as it is", *VARIANTS, *ROLLS):
             if only and only not in f"{stem} {name}":
                 continue
             cases += 1
             source = clip if name == "as it is" else _written(clip, name, truth["fps"])
-            flips = name != "as it is" and VARIANTS[name][2] < 0
+            flips = name in VARIANTS and VARIANTS[name][2] < 0
             expected = {"cw": "ccw", "ccw": "cw"}[sense] if flips else sense
             started = time.perf_counter()
             try:
@@ -129,9 +165,9 @@ def main() -> int:
                 print(f"{stem:<24} {name:<22} {'-':>8} {'-':>8} {'no result':>22}   {error}")
                 failed += 1
                 continue
-            error = analysis.omega_rad_s / truth["omega"] - 1.0
-            low = analysis.omega_low_rad_s / truth["omega"] - 1.0
-            high = analysis.omega_high_rad_s / truth["omega"] - 1.0
+            error = analysis.omega_rad_s / omega - 1.0
+            low = analysis.omega_low_rad_s / omega - 1.0
+            high = analysis.omega_high_rad_s / omega - 1.0
             covers = low <= 0.0 <= high
             told = analysis.direction
             verdict = "right" if told == expected else ("unknown" if told == "unknown" else "WRONG")

@@ -135,3 +135,39 @@ def test_a_face_whose_points_come_late_is_not_taken_for_a_shaking_camera(tmp_pat
     assert result.shake is None
     assert result.omega_rad_s == pytest.approx(0.2, rel=0.03)
     assert result.omega_low_rad_s <= 0.2 <= result.omega_high_rad_s
+
+
+def test_a_camera_that_rolls_smoothly_is_found_where_its_still_points_lie_all_round() -> None:
+    """A camera rolling 3 degrees a second on a tripod head does not jolt as a hand does; still
+    points all over the picture, and a body that goes on moving once the roll is taken out, tell
+    it is the camera's. The turn is reported, anticlockwise as the picture shows it."""
+    frames = 90
+    turn = np.radians(-3.0 * np.arange(frames) / 30.0)  # anticlockwise on the screen (y down: a negative turn)
+    tracks, steadied = _tracks(frames, np.zeros((frames, 2)), turn)
+    assert find_shake(tracks, frames) is None  # smooth, and nothing said of the picture's size
+    found = find_shake(tracks, frames, size_px=(640, 360))
+    assert found is not None
+    path, shake = found
+    assert shake.smooth
+    assert shake.turned_deg == pytest.approx(3.0 * (frames - 1) / 30.0, abs=0.05)
+    assert shake.turn_deg_s == pytest.approx(3.0, rel=0.02)
+    x, y = path.undo(tracks["frame"].to_numpy(), tracks["x_px"].to_numpy(), tracks["y_px"].to_numpy())
+    assert np.allclose(x, steadied["x_px"].to_numpy(), atol=0.05) and np.allclose(y, steadied["y_px"].to_numpy(),
+                                                                                   atol=0.05)
+
+
+def test_a_smooth_turn_of_points_in_one_patch_is_not_taken_for_a_rolling_camera() -> None:
+    """The cylinder's top of the test above, its picture's size now known: its points lie in one
+    patch of the picture, not all over it."""
+    rng = np.random.default_rng(4)
+    frames, points = 60, 30
+    radius, phase = rng.uniform(20, 150, points), rng.uniform(0, 2 * math.pi, points)
+    rows = []
+    for k in range(frames):
+        angle = phase + 0.2 * k / 30.0
+        x = 300 + radius * np.cos(angle) + rng.normal(0, 0.3, points)
+        y = 200 + radius * np.sin(angle) + rng.normal(0, 0.3, points)
+        rows += [(k, k / 30.0, track, x[track], y[track]) for track in range(points)]
+    tracks = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
+    tracks = tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True)
+    assert find_shake(tracks, frames, size_px=(1280, 720)) is None

@@ -286,6 +286,13 @@ def fitted_views(pairs: list[tuple[np.ndarray, np.ndarray]], start: DiscView, st
                    for other in [near[1]] + [v for _, v in chosen]):
                 chosen.append((score, view))
         found += [Candidate(*_refined(pairs, view, score, step_px, lags, budget), False) for score, view in chosen]
+        if search_tilt:
+            # and the plane face on about the best centre elsewhere, its centre alone sought: the
+            # freely refined ones can lean away (the rolled wheel's found axis lay 290 px off its
+            # hub; refined freely from the grid, 50 degrees tilted and 0.13; face on, at the hub)
+            score, view = max(((score, view) for score, view in scored
+                               if view.tilt_deg == 0.0 and view.centre_px != start.centre_px), key=lambda pair: pair[0])
+            found.append(Candidate(*_refined(pairs, view, score, step_px, lags, budget, face_on=True), False))
     return sorted(found, key=lambda candidate: -candidate.score)
 
 

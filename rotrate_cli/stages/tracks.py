@@ -11,7 +11,8 @@ image. The direction of that motion is this stage's by-product: the geometry sta
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections import deque
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -38,7 +39,7 @@ from rotrate_cli.tracking.klt import (
 )
 from rotrate_cli.tracking.steady import CameraPath, Shake, find_shake
 from rotrate_cli.video.decode import FrameSource, prefetch
-from rotrate_cli.video.frames import VideoInfo
+from rotrate_cli.video.frames import Frame, VideoInfo
 from rotrate_cli.video.shots import longest_shot
 
 #: Progress callback: (frames done, frames expected or None).
@@ -145,7 +146,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         _check_tracked(run, thumbnails, source)
     tracks = by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
-    shaken = None if config.points_px else find_shake(tracks, run.frames, 1.0 / scale)
+    shaken = None if config.points_px else find_shake(tracks, run.frames, 1.0 / scale, (info.width_px, info.height_px))
     if shaken is not None:
         # a hand-held camera: track again knowing its motion, so that the still background is let
         # go of as on a tripod and the points go to the body; the positions as a still camera saw them
@@ -169,15 +170,47 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     shake, camera = (None, None) if shaken is None else (shaken[1], shaken[0])
     keyframes.camera = camera
     if shake is not None:
-        notes.append(f"the camera shook ({shake.rms_px:.1f} px rms, at most {shake.largest_px:.1f} px): the tracks are "
-                     f"measured as a still camera would see them, from {shake.background_tracks} still background "
-                     "tracks")
+        notes.append(_shake_note(shake))
     if config.start_s == 0 and config.end_s is None:
         short = video.shortfall(run.frames, run.last_time_s)
         if short is not None:
             notes.append(short)
     return Footage(info, tracks, thumbnails, keyframes, pairs, run.frames, run.last_time_s - run.first_time_s,
                    float(angle), tuple(notes), shake, camera)
+
+
+#: A camera's own turn over the clip is named where it reaches this many degrees.
+MATERIAL_ROLL_DEG = 1.0
+
+
+def _shake_note(shake: Shake) -> str:
+    """What the camera's own motion was, and that it is taken out."""
+    moved = "moved smoothly" if shake.smooth else "shook"
+    turn = ""
+    if abs(shake.turned_deg) >= MATERIAL_ROLL_DEG:
+        sense = "anticlockwise" if shake.turned_deg > 0 else "clockwise"
+        rate = f", {abs(shake.turn_deg_s):.2g} degrees a second" if math.isfinite(shake.turn_deg_s) else ""
+        turn = f" and turned {abs(shake.turned_deg):.1f} degrees {sense} as the picture shows it{rate}"
+    return (f"the camera {moved} ({shake.rms_px:.1f} px rms, at most {shake.largest_px:.1f} px{turn}): the frames and "
+            f"tracks are measured as a still camera would see them, from {shake.background_tracks} still background "
+            "tracks")
+
+
+def _steadied_for(frames: Iterator[Frame], camera: CameraPath, scale: float,
+                  taps: Callable[[Iterator[Frame]], Iterator[Frame]]) -> Iterator[Frame]:
+    """``frames`` as they came, once ``taps`` (which yield each frame they are given, in order)
+    have seen them as a still camera would have (:meth:`CameraPath.steady_image`)."""
+    waiting: deque[Frame] = deque()
+    first: list[np.ndarray] = []
+
+    def steadied() -> Iterator[Frame]:
+        for frame in frames:
+            waiting.append(frame)
+            if not first:
+                first.append(frame.image)
+            yield Frame(frame.index, frame.time_s, camera.steady_image(frame.image, frame.index, scale, first[0]))
+    for _ in taps(steadied()):
+        yield waiting.popleft()
 
 
 def _check_against_frames(config: AnalysisConfig, info: VideoInfo) -> list[str]:
@@ -257,8 +290,12 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     size_px = (info.width_px, info.height_px)
     thumbnails.clear()
     pairs.clear()
-    # thumbnails and frame pairs made in the decoding thread: off the tracker's path
-    stream = prefetch(pairs.tap(thumbnails.tap(frames)))
+    # thumbnails and frame pairs made in the decoding thread: off the tracker's path; from the
+    # frames as a still camera would have seen them where the camera's motion is known (the
+    # tracker takes it out of its own points)
+    def taps(stream: Iterator[Frame]) -> Iterator[Frame]:
+        return pairs.tap(thumbnails.tap(stream))
+    stream = prefetch(taps(frames) if camera is None else _steadied_for(frames, camera, scale, taps))
     keyframes.clear()
     if config.points_px:
         return follow_points(stream, size_px, list(config.points_px), config.tracker_kind, tracker, notify)

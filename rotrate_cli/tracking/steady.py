@@ -1,4 +1,4 @@
-"""A hand-held camera's shake, taken out of the tracks (:func:`hold_still`).
+"""A hand-held camera's shake or roll, taken out of the tracks (:func:`find_shake`).
 
 A camera held in the hand moves the whole picture by a few pixels from frame to frame. Every
 tracked point carries that motion on top of its own, and a fit of a turn to an offset that
@@ -12,6 +12,13 @@ tracks. On a tripod the tracker has already let go of still points (they say not
 turn), so no background is left and nothing changes; where the tracks that move together do not
 stand still once the path is taken out (the body's own points, a close-up with no background),
 nothing changes either.
+
+A camera that rolls or pans smoothly (on a tripod head, or slowly in the hand) does not jolt, and
+a smooth path is also what a body's own points give where they turn together as one picture (the
+top of a cylinder seen from above). It is the camera's where the still points lie all over the
+picture (:data:`BROAD`), not in one patch, and other points still move once it is taken out:
+the body turning in front of the background. The shared wheel rolled 3 degrees a second: 30
+still points across the whole picture, turned 39.6 degrees over the clip's 41.6.
 """
 
 from __future__ import annotations
@@ -46,6 +53,17 @@ JOLT_NOISE = 3.0
 JOLT_SHARE = 0.05
 #: The rms of a two-dimensional normal error over the median of its sizes: sqrt(2) / sqrt(2 ln 2).
 RMS_PER_MEDIAN = 1.0 / math.sqrt(math.log(2.0))
+#: A smooth path is the camera's where the still points' mean positions span at least this share
+#: of the picture's width and of its height ...
+BROAD = 0.5
+#: ... and at least this many other tracks (of :data:`MIN_FRAMES` or more) move by more than
+#: :data:`MOVING_PX` (rms about their mean, tracking pixels) once it is taken out (the rolled
+#: wheel: 9, its thin spokes hold few long tracks).
+MIN_MOVING = 5
+MOVING_PX = 5.0
+#: A camera that turned less than this over the clip (degrees), and shook less than
+#: :data:`SHAKE_PX`, is still.
+ROLL_DEG = 0.3
 #: Rounds of (path, background) found in turn.
 ROUNDS = 4
 
@@ -60,18 +78,28 @@ class Shake:
         jolt_px: its typical change of step from one frame to the next, as an rms (the median
             of their sizes, scaled; see :func:`_typical_jolt`).
         background_tracks: tracks that showed it.
+        turned_deg: how far the camera turned (rolled) over the clip, degrees (signed:
+            anticlockwise as the picture shows it).
+        turn_deg_s: its rate of turning, a line fitted to its angle over time, degrees a second
+            (NaN where the tracks carry no times).
+        smooth: the path does not jolt: a camera that rolls or pans (see the module's notes).
     """
 
     rms_px: float
     largest_px: float
     jolt_px: float
     background_tracks: int
+    turned_deg: float = 0.0
+    turn_deg_s: float = math.nan
+    smooth: bool = False
 
 
-def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0) -> tuple[CameraPath, Shake] | None:
+def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0,
+               size_px: tuple[int, int] | None = None) -> tuple[CameraPath, Shake] | None:
     """The camera's motion and its size, from ``tracks`` (``frame, track, x_px, y_px``, sorted by
     track then frame) over ``frames`` frames; None where no shake shows (see the module's notes).
-    ``pixel_px``: a tracking-image pixel in the tracks' pixels."""
+    ``pixel_px``: a tracking-image pixel in the tracks' pixels; ``size_px``: the picture's width
+    and height, without which a smooth path (a roll, a pan) is not taken for the camera's."""
     if tracks.empty:
         return None
     track = tracks["track"].to_numpy()
@@ -117,9 +145,39 @@ def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0) -> tupl
     # the path's own noise, from the background's scatter about it, jolts too (sqrt 6 for a second
     # difference of independent errors)
     noise = math.sqrt(6.0) * float(np.median(spread[background])) / math.sqrt(background.sum())
-    if rms < SHAKE_PX * pixel_px or jolt < max(JOLT_PX * pixel_px, JOLT_NOISE * noise, JOLT_SHARE * rms):
+    angles = -np.degrees(path.angle_rad[present])  # anticlockwise as shown (the path's turns are y down)
+    if rms < SHAKE_PX * pixel_px and float(np.ptp(angles)) < ROLL_DEG:
         return None
-    return path, Shake(rms, float(distance.max()), jolt, int(background.sum()))
+    smooth = jolt < max(JOLT_PX * pixel_px, JOLT_NOISE * noise, JOLT_SHARE * rms)
+    if smooth and not _camera_s(tracks, path, long_ids[background], size_px, pixel_px):
+        return None
+    rate = math.nan
+    if "time_s" in tracks:
+        times = tracks.groupby("frame")["time_s"].first().reindex(np.arange(first, last + 1)).to_numpy()[present]
+        if len(times) >= 2 and np.ptp(times) > 0:
+            rate = float(np.polyfit(np.asarray(times, np.float64), angles, 1)[0])
+    return path, Shake(rms, float(distance.max()), jolt, int(background.sum()), float(angles[-1] - angles[0]),
+                       rate, smooth)
+
+
+def _camera_s(tracks: pd.DataFrame, path: CameraPath, still_ids: np.ndarray, size_px: tuple[int, int] | None,
+              pixel_px: float) -> bool:
+    """True where a smooth ``path`` is the camera's (see the module's notes): the still tracks
+    ``still_ids`` lie all over the picture, and other tracks still move once it is taken out."""
+    if size_px is None:
+        return False
+    track = tracks["track"].to_numpy()
+    x, y = path.undo(tracks["frame"].to_numpy(), tracks["x_px"].to_numpy(dtype=np.float64),
+                     tracks["y_px"].to_numpy(dtype=np.float64))
+    ids, inverse, counts = np.unique(track, return_inverse=True, return_counts=True)
+    mean_x, mean_y = np.bincount(inverse, x) / counts, np.bincount(inverse, y) / counts
+    still = np.isin(ids, still_ids)
+    width, height = size_px
+    if np.ptp(mean_x[still]) < BROAD * width or np.ptp(mean_y[still]) < BROAD * height:
+        return False
+    spread = _spread(track, x, y)
+    moving = (~still) & (counts >= MIN_FRAMES) & (spread > MOVING_PX * pixel_px)
+    return int(moving.sum()) >= MIN_MOVING
 
 
 @dataclass(frozen=True)
@@ -173,6 +231,17 @@ class CameraPath:
         rotation = np.array([[c, -s], [s, c]])
         shift = self.shift_px[b] - rotation @ self.shift_px[a]
         return np.hstack([rotation, (scale * shift)[:, None]])
+
+    def steady_image(self, image: np.ndarray, frame: int, scale: float, fill: np.ndarray) -> np.ndarray:
+        """``image`` (frame ``frame``'s, ``scale`` times the tracks' pixels) as the camera saw it
+        from where it stood at the first frame; what it did not see there is ``fill`` (the first
+        frame's own image: still, as the background is once steadied)."""
+        import cv2
+        out = fill.copy()
+        height, width = image.shape[:2]
+        cv2.warpAffine(image, self.between(frame, self.first_frame, scale), (width, height), dst=out,
+                       flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_TRANSPARENT)
+        return out
 
     def moved(self, point: np.ndarray) -> np.ndarray:
         """Where the first frame's ``point`` lies in every frame (frames x 2)."""

@@ -45,6 +45,10 @@ class RotorScene:
         weather: slow change over the whole picture, as through a window on a rainy day (0: none,
             1: the light across the picture swinging by a third, drops running down the glass,
             the camera drifting 4 pixels over the clip); the picture then never returns exactly.
+        roll_deg_s: the camera's own roll, degrees a second (anticlockwise as the picture shows
+            it, for a positive rate): the whole picture turned about its centre, enlarged by a
+            seventh so that no corner shows; the rotor's rate stays ``omega_rad_s`` against the
+            still background.
         seed: of the textures and the noise.
     """
 
@@ -62,6 +66,7 @@ class RotorScene:
     noise: float = 2.0
     texture: float = 1.0
     weather: float = 0.0
+    roll_deg_s: float = 0.0
     seed: int = 0
 
     @property
@@ -158,6 +163,10 @@ def rotor_frames(scene: RotorScene) -> Iterator[np.ndarray]:
         grey = covered * turned + (1.0 - covered) * background
         if weather is not None:
             grey = weather.over(grey, index)
+        if scene.roll_deg_s:
+            centre = ((scene.width_px - 1) / 2.0, (scene.height_px - 1) / 2.0)
+            roll = cv2.getRotationMatrix2D(centre, scene.roll_deg_s * index / scene.fps, 1.15)
+            grey = cv2.warpAffine(grey, roll, shape, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
         if scene.noise > 0:
             grey = grey + noise_rng.normal(0.0, scene.noise, grey.shape)
         image = np.clip(np.rint(grey), 0, 255).astype(np.uint8)
