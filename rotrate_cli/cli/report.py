@@ -167,6 +167,8 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
         "shake": None if analysis.shake is None else {
             "rms_px": _number(analysis.shake.rms_px, 3), "largest_px": _number(analysis.shake.largest_px, 3),
             "background_tracks": analysis.shake.background_tracks,
+            "turned_deg": _number(analysis.shake.turned_deg, 3), "turn_deg_s": _number(analysis.shake.turn_deg_s, 4),
+            "smooth": analysis.shake.smooth,
         },
         "direction": analysis.direction,
         "direction_seen": _direction_seen(analysis),
