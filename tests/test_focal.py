@@ -162,6 +162,7 @@ def test_a_lens_the_tracks_cannot_tell_widens_the_interval_and_says_so() -> None
     assert unknown.omega_high_rad_s >= chosen.omega_high_rad_s
 
 
+@pytest.mark.slow  # over 10 s: `make test-slow`
 def test_a_fit_stopped_at_the_orthographic_bound_is_started_again_from_a_wide_lens(tmp_path: Path) -> None:
     """A cylinder filling a portrait frame through a 40-degree lens, seen from 15 degrees above:
     the fit from the orthographic start stopped at the bound, and the clip read +49% within

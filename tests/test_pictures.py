@@ -188,6 +188,7 @@ def test_plot_writes_a_readable_picture(tmp_path: Path) -> None:
     assert [p.name for p in tmp_path.iterdir()] == ["plot.png"]
 
 
+@pytest.mark.slow  # over 10 s: `make test-slow`
 def test_csrt_stops_rather_than_drifting() -> None:
     from rotrate_cli import AnalysisConfig, analyze
 

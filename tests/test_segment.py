@@ -74,6 +74,7 @@ def test_a_single_body_clip_segments_into_one_body(clip: str, options: dict) -> 
     assert analysis.omega_rad_s == pytest.approx(truth_of(path)["omega_rad_s"], rel=0.01)
 
 
+@pytest.mark.slow  # over 10 s: `make test-slow`
 def test_segment_on_the_command_line() -> None:
     runner = CliRunner()
     result = runner.invoke(app, ["analyze", str(TWO), "--segment", "--format", "json", "--quiet"])
