@@ -15,6 +15,9 @@ from rotrate_cli.tracking.klt import (
     TrackerConfig,
 )
 
+#: The trackers a measurement can use (``auto``: chosen by the source, see :class:`AnalysisConfig`).
+TRACKER_KINDS = ("auto", *TRACKERS, "matched")
+
 #: How the axis's angle is found when not given (see ``AnalysisConfig.angle_from``).
 ANGLE_SOURCES = ("auto", "motion", "paths")
 #: The ways round an object can be told to turn (``--direction``), seen from the axis's top end.
@@ -66,9 +69,12 @@ class AnalysisConfig:
             pictures of the measurement; they cost memory in proportion to the clip.
         points_px: follow only these points (x, y pixels in the first analysed frame), as
             features 1..n, instead of finding corners (see :mod:`rotrate_cli.tracking.chosen`).
-        tracker_kind: ``klt`` (pyramidal Lucas-Kanade) or ``csrt`` (OpenCV's CSRT: for chosen
+        tracker_kind: ``auto`` (the default: ``klt`` for videos, ``matched`` for image
+            sequences), ``klt`` (pyramidal Lucas-Kanade), ``csrt`` (OpenCV's CSRT: for chosen
             points, or for 30 automatic corners placed to sub-pixel, see :mod:`rotrate_cli.tracking.csrt`;
-            about 5x slower than ``klt``, and for videos, not stills far apart).
+            about 5x slower than ``klt``, and for videos, not stills far apart) or ``matched``
+            (SIFT features matched from frame to frame, for photographs far apart on the turn:
+            :mod:`rotrate_cli.tracking.matched`).
         times_s: one time per frame, seconds (``--times``), instead of the source's clock.
     """
 
@@ -91,7 +97,7 @@ class AnalysisConfig:
     segment: bool = False
     keep_tracks: bool = False
     points_px: tuple[tuple[float, float], ...] = ()
-    tracker_kind: str = "klt"
+    tracker_kind: str = "auto"
     times_s: tuple[float, ...] | None = None
 
 
@@ -132,8 +138,11 @@ def check_config(config: AnalysisConfig) -> None:
                                "elevation_deg")
     if config.direction not in (None, *DIRECTIONS):
         raise SettingError(f"`direction` must be one of {', '.join(DIRECTIONS)}; got {config.direction!r}", "direction")
-    if config.tracker_kind not in TRACKERS:
-        raise SettingError(f"`tracker_kind` must be one of {', '.join(TRACKERS)}; got {config.tracker_kind!r}",
+    if config.tracker_kind not in TRACKER_KINDS:
+        raise SettingError(f"`tracker_kind` must be one of {', '.join(TRACKER_KINDS)}; got {config.tracker_kind!r}",
+                           "tracker_kind")
+    if config.points_px and config.tracker_kind not in (*TRACKERS, "auto"):
+        raise SettingError(f"chosen points are followed by {' or '.join(TRACKERS)}, not {config.tracker_kind!r}",
                            "tracker_kind")
     if config.segment and config.fixation_px is not None:
         raise SettingError("`segment` finds each body's axis itself; drop `fixation_px` (or use `fixation_px=None`)",

@@ -74,7 +74,8 @@ def test_csrt_automatic_points_measure_the_rendered_rate(name: str) -> None:
 
 def test_csrt_on_stills_far_apart_says_to_use_klt() -> None:
     """CSRT loses every point on photographs 10 degrees apart; the turn closes in the 36 frames,
-    so the rate still comes from the repetition, and the warning says to use klt."""
+    so the rate still comes from the repetition, and the warning says to use the default tracker
+    (matched features, on photographs)."""
     from tests.conftest import DINOSAUR, need
 
     need(DINOSAUR / "frames", "the dinosaur photographs")
@@ -83,4 +84,4 @@ def test_csrt_on_stills_far_apart_says_to_use_klt() -> None:
     assert analysis.rate_from == "repetition"
     assert analysis.omega_rad_s == pytest.approx(math.radians(10.0), rel=0.01)
     assert analysis.direction == "unknown"
-    assert any("`tracker_kind='klt'`" in warning for warning in analysis.warnings)
+    assert any("`tracker_kind='auto'`" in warning for warning in analysis.warnings)

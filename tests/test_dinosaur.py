@@ -23,6 +23,21 @@ def test_dinosaur_photographs_within_two_percent() -> None:
     assert result.frames == 36
 
 
+@pytest.mark.parametrize("photographs", [9, 14, 18])
+def test_dinosaur_under_a_turn_from_its_matched_features(photographs: int) -> None:
+    """90, 140 and 180 degrees of the turntable, the axis found: Lucas-Kanade kept few points for
+    more than a photograph or two (10 degrees apart) and none from the first four (no result,
+    +6.8% weak with its interval missing, -0.8% weak). SIFT features matched from photograph to
+    photograph, fitted from 5 samples: within 1%, good."""
+    need(DINOSAUR / "frames", "the dinosaur photographs")
+    truth = json.loads((DINOSAUR / "truth.json").read_text())["radians_per_frame"]
+    result = analyze(DINOSAUR / "frames", AnalysisConfig(fixation_px=None, fps=1.0, end_s=photographs - 0.5))
+    assert result.frames == photographs
+    assert result.quality == "good"
+    assert result.omega_rad_s == pytest.approx(truth, rel=0.01)
+    assert result.omega_low_rad_s <= truth <= result.omega_high_rad_s
+
+
 def test_dinosaur_axis_and_camera_from_the_paths() -> None:
     # the published axis leans 1.18 degrees (top end left) and the camera looks down about 30;
     # the motion's angle is -4.0, whose error happens to offset the photographs' perspective
@@ -32,7 +47,10 @@ def test_dinosaur_axis_and_camera_from_the_paths() -> None:
     truth = json.loads((DINOSAUR / "truth.json").read_text())
     (top_x, _), (bottom_x, bottom_y) = truth["axis_line_px"]["top"], truth["axis_line_px"]["bottom"]
     published_deg = math.degrees(math.atan2(top_x - bottom_x, bottom_y))  # + leans the top end right
-    config = AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), fps=1.0, angle_from="paths", fov_deg=15.0)
+    # Lucas-Kanade's paths: the matched features' (the default on photographs) are shorter, and
+    # read the axis -0.62 degrees
+    config = AnalysisConfig(fixation_px=tuple(truth["fixation_px"]), fps=1.0, angle_from="paths", fov_deg=15.0,
+                            tracker_kind="klt")
     result = analyze(DINOSAUR / "frames", config)
     assert result.axis_angle_deg == pytest.approx(published_deg, abs=0.5)
     assert result.elevation_deg == pytest.approx(30.0, abs=5.0)

@@ -107,11 +107,12 @@ def analyze_command(
                                                     help="X,Y of a point to follow (repeat for "
                                                                      "more): features 1..n, as the paper's "
                                                                      "hand-tracked ones.")] = None,
-    tracker_kind: Annotated[str | None, typer.Option("--tracker", metavar="klt|csrt",
-                                                     help="klt or csrt (default: klt; csrt with "
-                                                                       "--track). Automatic csrt follows 30 "
-                                                                       "corners, about 5x slower; videos only, "
-                                                                       "not stills far apart.")] = None,
+    tracker_kind: Annotated[str | None, typer.Option("--tracker", metavar="auto|klt|csrt|matched",
+                                                     help="auto (default: klt for videos, matched for "
+                                                          "image sequences; csrt with --track), klt, "
+                                                          "csrt (automatic: 30 corners, about 5x "
+                                                          "slower; videos only) or matched (SIFT "
+                                                          "features matched photo to photo).")] = None,
     scale: Annotated[float | None, typer.Option("--scale", metavar="UNITS_PER_PX",
                                                 help="Physical units per pixel: positions and "
                                                                 "derivatives in the reports in those units "
@@ -229,7 +230,7 @@ def _config(*, fixation: str | None, fps: float | None, times: Path | None, star
                           tracker=tracker, segment=segment, keep_tracks=keep_tracks,
                           points_px=tuple((x, y) for x, y in (numbers(t, 2, "--track", "320,180")
                                                               for t in track or [])),
-                          tracker_kind=tracker_kind or ("csrt" if track else "klt"))
+                          tracker_kind=tracker_kind or ("csrt" if track else "auto"))
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,7 @@ from rotrate_cli.tracking.klt import (
     tracking_image,
     tracking_scale,
 )
+from rotrate_cli.tracking.matched import match_frames
 from rotrate_cli.tracking.steady import CameraPath, Shake, find_shake
 from rotrate_cli.video.decode import FrameSource, prefetch
 from rotrate_cli.video.frames import Frame, VideoInfo
@@ -80,6 +81,8 @@ class Footage:
         warnings: what the user should know from decoding and tracking.
         shake: the hand-held camera's shake taken out of the tracks (:mod:`rotrate_cli.tracking.steady`);
             None where none showed. ``camera``: its motion, to draw the tracks on its frames.
+        matched: the tracks are features matched from photograph to photograph
+            (:mod:`rotrate_cli.tracking.matched`): short, and sampled sparsely on the turn.
     """
 
     info: VideoInfo
@@ -93,6 +96,7 @@ class Footage:
     warnings: tuple[str, ...] = ()
     shake: Shake | None = None
     camera: CameraPath | None = None
+    matched: bool = False
 
 
 class NothingTracked(NoResultError):
@@ -176,7 +180,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         if short is not None:
             notes.append(short)
     return Footage(info, tracks, thumbnails, keyframes, pairs, run.frames, run.last_time_s - run.first_time_s,
-                   float(angle), tuple(notes), shake, camera)
+                   float(angle), tuple(notes), shake, camera, matched_tracks(config, info))
 
 
 #: A camera's own turn over the clip is named where it reaches this many degrees.
@@ -194,6 +198,13 @@ def _shake_note(shake: Shake) -> str:
     return (f"the camera {moved} ({shake.rms_px:.1f} px rms, at most {shake.largest_px:.1f} px{turn}): the frames and "
             f"tracks are measured as a still camera would see them, from {shake.background_tracks} still background "
             "tracks")
+
+
+def matched_tracks(config: AnalysisConfig, info: VideoInfo) -> bool:
+    """True where the tracks are features matched from frame to frame (``tracker_kind``
+    ``matched``, or ``auto`` on an image sequence without chosen points)."""
+    return not config.points_px and (config.tracker_kind == "matched"
+                                     or (config.tracker_kind == "auto" and info.is_image_sequence))
 
 
 def _steadied_for(frames: Iterator[Frame], camera: CameraPath, scale: float,
@@ -297,9 +308,13 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
         return pairs.tap(thumbnails.tap(stream))
     stream = prefetch(taps(frames) if camera is None else _steadied_for(frames, camera, scale, taps))
     keyframes.clear()
+    kind = config.tracker_kind
     if config.points_px:
-        return follow_points(stream, size_px, list(config.points_px), config.tracker_kind, tracker, notify)
+        return follow_points(stream, size_px, list(config.points_px), "klt" if kind == "auto" else kind, tracker,
+                             notify)
     stream = keyframes.tap(stream)
-    if config.tracker_kind == "csrt":
+    if matched_tracks(config, info):
+        return match_frames(stream, scale, notify)
+    if kind == "csrt":
         return track_frames(stream, size_px, csrt_settings(tracker), notify, kind=CsrtTracker, camera=camera)
     return track_frames(stream, size_px, tracker, notify, camera=camera)
