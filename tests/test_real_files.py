@@ -17,7 +17,7 @@ from rotrate_cli.analysis import AnalysisConfig, analyze
 from rotrate_cli.cli import app
 from tests.conftest import SAMPLES
 
-imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg", reason="the dev dependency imageio-ffmpeg makes these files")
+imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg", reason="imageio-ffmpeg (a dependency) makes these files")
 BOX = SAMPLES / "box_ortho.mp4"
 FIXATION = ["--fixation", "319.5,179.5"]
 runner = CliRunner()

@@ -57,8 +57,8 @@ BY_SOURCE = ("retry_lost", "predict_new", "laid_along_rows", "steady_light")
 MIN_TRACKS_FOR_ANGLE = 10
 
 _INTERLACED_HINT = ("if the video shows motion, it is probably interlaced (camcorder, broadcast, DV), which this "
-                    "OpenCV cannot decode: deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4) or pip install "
-                    "'rotrate[ffmpeg]'")
+                    "OpenCV cannot decode: deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4), or reinstall "
+                    "imageio-ffmpeg (a dependency) or put an ffmpeg on the PATH")
 
 
 @dataclass(frozen=True)

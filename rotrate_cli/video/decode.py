@@ -158,7 +158,7 @@ class FrameSource:
         if program is None and self._starts_black():
             self.warnings.append(f"the first frames of {self._source} decode black; if the video is not black there "
                                  "it is probably interlaced, which this OpenCV decodes as black: deinterlace it "
-                                 "(ffmpeg -i IN -vf yadif OUT.mp4) or pip install 'rotrate[ffmpeg]'")
+                                 "(ffmpeg -i IN -vf yadif OUT.mp4), or put an ffmpeg on the PATH")
         return first
 
     def looks_undecoded(self, image: np.ndarray) -> bool:
@@ -219,8 +219,8 @@ class FrameSource:
             program = ffmpeg_program()
             if program is None:
                 raise InputError(f"OpenCV decodes the frames of {self._source} black (an interlaced stream: camcorder, "
-                                 "broadcast, DV?): deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4) or pip install "
-                                 "'rotrate[ffmpeg]'")
+                                 "broadcast, DV?): deinterlace it (ffmpeg -i IN -vf yadif OUT.mp4), or reinstall "
+                                 "imageio-ffmpeg (a dependency) or put an ffmpeg on the PATH")
             self._switch_to_ffmpeg(program)
         assert self._pipe is not None  # noqa: S101 - only called in pipe mode
         for index, image in enumerate(piped_frames(self._pipe, self._source, self.info.width_px,

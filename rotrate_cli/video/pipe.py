@@ -5,8 +5,8 @@ interlaced (camcorders, broadcast, DV, interlaced H.264): its colour conversion 
 interlaced pictures, and its raw-plane path gives zeros too. FFmpeg's own program decodes them,
 and deinterlaces them on the way (``yadif``, one frame per frame, only frames flagged
 interlaced), so they measure as any other video. The program is the one ``imageio-ffmpeg``
-ships (``pip install 'rotrate[ffmpeg]'``), else an ``ffmpeg`` on the PATH; without either, the
-user is told how to deinterlace the file.
+ships (a dependency), else an ``ffmpeg`` on the PATH; without either (imageio-ffmpeg has no
+binary for every platform), the user is told how to deinterlace the file.
 """
 
 from __future__ import annotations
