@@ -141,12 +141,16 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         raise NothingTracked(str(error), Footage(info, run.tracks, thumbnails, keyframes, pairs, run.frames,
                                                  run.last_time_s - run.first_time_s, math.nan,
                                                  tuple(warnings))) from None
-    shot = None if config.points_px else longest_shot(thumbnails.times_s, thumbnails.images, thumbnails.levels)
+    shot = None if config.points_px else longest_shot(thumbnails.times_s, thumbnails.images, thumbnails.levels,
+                                                      tuple(video.damaged_s))
+    skip_s: tuple[tuple[float, float], ...] = ()
     if shot is not None:
-        # the clip cuts: tracks do not cross a cut, and the repetition is another scene's too
+        # the clip cuts: tracks do not cross a cut, and the repetition is another scene's too;
+        # frames garbled after a damaged spot are left out
         last = shot.last == len(thumbnails.times_s) - 1  # to the clip's end (thumbnails stop at a long clip's)
         config = replace(config, start_s=shot.start_s, end_s=config.end_s if last else shot.end_s)
-        run = _track(video, config, tracker, progress, thumbnails, keyframes, pairs)
+        skip_s = shot.skipped_s
+        run = _track(video, config, tracker, progress, thumbnails, keyframes, pairs, skip_s=skip_s)
         _check_tracked(run, thumbnails, source)
     tracks = by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
@@ -154,7 +158,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     if shaken is not None:
         # a hand-held camera: track again knowing its motion, so that the still background is let
         # go of as on a tripod and the points go to the body; the positions as a still camera saw them
-        run = _track(video, config, tracker, progress, thumbnails, keyframes, pairs, shaken[0])
+        run = _track(video, config, tracker, progress, thumbnails, keyframes, pairs, shaken[0], skip_s)
         tracks = shaken[0].steady(by_track(run.tracks))
     angle = config.axis_angle_deg if config.axis_angle_deg is not None else math.nan
     if config.axis_angle_deg is None and tracks["track"].nunique() >= MIN_TRACKS_FOR_ANGLE:
@@ -162,7 +166,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         if across(angle):
             # the motion runs up and down the image: track again with the window turned to suit it
             camera = None if shaken is None else shaken[0]
-            run = _track(video, config, turned(tracker), progress, thumbnails, keyframes, pairs, camera)
+            run = _track(video, config, turned(tracker), progress, thumbnails, keyframes, pairs, camera, skip_s)
             if run.tracks.empty:
                 raise NoResultError(no_result_message(pd.DataFrame(columns=["reason"])))
             tracks = by_track(run.tracks) if camera is None else camera.steady(by_track(run.tracks))
@@ -279,11 +283,12 @@ def turned(tracker: TrackerConfig) -> TrackerConfig:
 
 def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
            progress: ProgressCallback | None, thumbnails: Thumbnails, keyframes: Keyframes, pairs: FramePairs,
-           camera: CameraPath | None = None) -> TrackingRun:
+           camera: CameraPath | None = None, skip_s: tuple[tuple[float, float], ...] = ()) -> TrackingRun:
     """Decode (in a background thread) and track the frames of ``video`` between start and end,
     keeping a thumbnail of each in ``thumbnails`` and some of the tracker's images in
     ``keyframes`` (both emptied first: a run again replaces the last); ``camera``: its own motion,
-    where known."""
+    where known; ``skip_s``: stretches of frames left out (first and last time, seconds: those a
+    damaged spot garbled, :class:`rotrate_cli.video.shots.Shot`)."""
     info = video.info
     scale = tracking_scale((info.width_px, info.height_px), tracker)
     blur = tracker.blur_sigma_px
@@ -296,6 +301,9 @@ def _track(video: FrameSource, config: AnalysisConfig, tracker: TrackerConfig,
     # the luma table is known once the stream has read (and checked) its first frame
     frames = video.frames(config.start_s, config.end_s, grey=True, map_luma=False,
                           transform=lambda image: tracking_image(image, scale, blur, video.luma_levels()))
+    if skip_s:
+        frames = (frame for frame in frames
+                  if not any(first - 1e-9 <= frame.time_s <= last + 1e-9 for first, last in skip_s))
     expected = info.frame_count
     notify = None if progress is None else (lambda done, _time_s: progress(done, expected))
     size_px = (info.width_px, info.height_px)

@@ -67,6 +67,8 @@ class FrameSource:
         self._files: list[Path] | None = None
         self._codec = ""  # the stream's FOURCC, upper case (a video's)
         self._pipe: str | None = None  # the FFmpeg program that decodes what OpenCV gives black
+        #: the damaged spots seen so far: the times of the decoded frames either side of each
+        self.damaged_s: list[tuple[float, float]] = []
         #: frames that could not be decoded between good ones, over all reads so far
         self.failed_frames = 0
         self._first_grey: np.ndarray | None = None  # a thumbnail of a video's first frame, to check its luma
@@ -360,8 +362,11 @@ class FrameSource:
         return f"decoded {decoded} of the {expected} frames the file announces; it may be cut off or damaged"
 
     def _note_failed(self, count: int, before_s: float, after_s: float) -> None:
-        """Say that ``count`` frames between two decoded ones could not be decoded."""
+        """Say that ``count`` frames between two decoded ones could not be decoded (and keep
+        where: :attr:`damaged_s`)."""
         self.failed_frames += count
+        if (before_s, after_s) not in self.damaged_s:
+            self.damaged_s.append((before_s, after_s))
         where = (f"between {before_s:.2f} s and {after_s:.2f} s" if math.isfinite(before_s)
                  else f"before {after_s:.2f} s")
         note = f"{count} frame(s) of {self._source} could not be decoded {where} (a damaged spot); the rest were read"
