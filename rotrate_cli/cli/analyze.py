@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -283,8 +284,11 @@ def _one(source: str, config: AnalysisConfig, outputs: _Outputs, form: str, unit
     if outputs.series_csv is not None:
         write_text(outputs.series_csv, series_csv(analysis), outputs.force)
     if outputs.overlay is not None:
-        _write_overlay(source, config.fps, config.start_s, config.end_s, analysis, outputs.overlay, outputs.force,
-                       None if config.times_s is None else np.asarray(config.times_s))
+        with progress_bar(quiet) as (progress, stage):
+            if stage is not None:
+                stage("writing the overlay")
+            _write_overlay(source, config.fps, config.start_s, config.end_s, analysis, outputs.overlay, outputs.force,
+                           None if config.times_s is None else np.asarray(config.times_s), progress)
     shown = analysis if units is None else with_units(analysis, *units)
     if outputs.plot is not None:
         from rotrate_cli.cli.plots import write_plot
@@ -317,7 +321,8 @@ def _units(scale: float | None, unit: str | None) -> tuple[float, str] | None:
 
 
 def _write_overlay(source: str, fps: float | None, start: float, end: float | None, analysis: Analysis,
-                   path: Path, force: bool, times_s: np.ndarray | None = None) -> None:
+                   path: Path, force: bool, times_s: np.ndarray | None = None,
+                   progress: Callable[[int, int | None], None] | None = None) -> None:
     """The overlay video of a finished analysis (see :func:`rotrate_cli.output.overlay.write_overlay`):
     the running rate of the tracks, or, where the rate is the clip's repetition or the picture's
     turning (not the tracks'), the reported rate throughout."""
@@ -346,7 +351,7 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
     named = {int(track): str(reason) for track, reason in zip(features["track"], features["reason"], strict=True)
              if reason in ("reflection", "slides", "other_motion")}
     write_overlay(FrameSource(source, fps=fps, times_s=times_s), path, analysis.tracks, inliers, analysis.fixation_px,
-                  analysis.axis_angle_deg, at, start, end, force, named)
+                  analysis.axis_angle_deg, at, start, end, force, named, progress)
 
 
 def _detail_paths(sources: list[str], folder: Path, suffix: str) -> list[Path]:

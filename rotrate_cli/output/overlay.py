@@ -119,14 +119,16 @@ def write_overlay(
     end_s: float | None = None,
     force: bool = False,
     named: dict[int, str] | None = None,
+    progress: Callable[[int, int | None], None] | None = None,
 ) -> int:
     """Write the overlay video: each frame of ``source`` between ``start_s`` and ``end_s`` with
     the axis, each track's last :data:`TRAIL_S` of path (inliers green, rejected red, those
     ``named`` reflection, slides or other_motion in :data:`NAMED_COLOURS`, with a legend), and
     the running omega ``running(time_s) -> (omega, low, high)`` written on it.
 
-    ``tracks`` has ``track, frame, x_px, y_px`` (features numbered as in the report). Returns
-    the number of frames written.
+    ``tracks`` has ``track, frame, x_px, y_px`` (features numbered as in the report).
+    ``progress`` is called after each frame written with the count so far and the source's frame
+    count (None where unknown). Returns the number of frames written.
     """
     info = source.info
     fourcc = cv2.VideoWriter_fourcc(*("mp4v" if path.suffix.lower() in {".mp4", ".mov", ".mkv", ""} else "MJPG"))
@@ -136,7 +138,7 @@ def write_overlay(
             raise OutputError(f"could not open a video writer for {path}; use a .mp4 or .avi name")
         try:
             return _draw_frames(source, writer, tracks, inliers, point_px, angle_deg, running, start_s, end_s,
-                                named or {})
+                                named or {}, progress)
         finally:
             writer.release()
 
@@ -145,6 +147,7 @@ def _draw_frames(
     source: FrameSource, writer: cv2.VideoWriter, tracks: pd.DataFrame, inliers: set[int],
     point_px: tuple[float, float], angle_deg: float, running: Callable[[float], tuple[float, float, float]],
     start_s: float, end_s: float | None, named: dict[int, str],
+    progress: Callable[[int, int | None], None] | None = None,
 ) -> int:
     """Draw and write the overlay's frames (see :func:`write_overlay`); returns how many."""
     info = source.info
@@ -183,6 +186,8 @@ def _draw_frames(
         _legend(image, scale, sorted(set(named.values()) & set(NAMED_COLOURS)))
         writer.write(image)
         written += 1
+        if progress is not None:
+            progress(written, info.frame_count)
     return written
 
 
