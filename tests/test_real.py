@@ -34,7 +34,10 @@ def test_epfl_car_on_a_turntable(sequence: str, clock: str) -> None:
     # its tracks turn well under a turn in that time: seq02's glossy tracks read 0.028 rad/frame
     # for 0.065, as a car's look-alike view half a turn on would (see the next test); its interval
     # then spans the tracks' rate too
-    assert analysis.quality == "good" or all("comes back only once" in why for why in analysis.verdict.weak_because)
+    assert analysis.quality == "good" or all("comes back only once" in why or "nothing tells whether that is a whole "
+                                             "turn" in why for why in analysis.verdict.weak_because)
+    # (the matched features, the default on photographs, leave seq02's sense through the lens
+    # untold, and so the count of returns a turn by EXIF clock: weak, its rate the same +0.16%)
     assert analysis.clock == clock
     assert analysis.camera_from == "exif"  # the lens from the photographs
 
@@ -56,8 +59,9 @@ def test_a_part_of_a_car_s_turn_settles_its_axis_and_says_how_well(sequence: str
     need(folder, f"the EPFL car sequence {sequence}")
     truth = json.loads((folder / "truth.json").read_text())["omega_rad_s"]
     times_s = exif_times(sorted(folder.glob("*.jpg"))).times_s
+    # Lucas-Kanade's tracks, whose axis this is about (the matched features read seq02's -2.3%)
     analysis = analyze(folder, AnalysisConfig(fixation_px=None, start_s=times_s[first] - 0.05,
-                                              end_s=times_s[first + count - 1] + 0.05))
+                                              end_s=times_s[first + count - 1] + 0.05, tracker_kind="klt"))
     assert analysis.rate_from == "tracks"
     assert analysis.omega_rad_s == pytest.approx(truth, rel=within)
     assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
@@ -72,7 +76,9 @@ def test_an_axis_found_from_two_tracks_leaves_the_rate_open() -> None:
     need(folder, "the EPFL car sequence seq02")
     truth = json.loads((folder / "truth.json").read_text())["omega_rad_s"]
     times_s = exif_times(sorted(folder.glob("*.jpg"))).times_s
-    analysis = analyze(folder, AnalysisConfig(fixation_px=None, start_s=times_s[45] - 0.05, end_s=times_s[74] + 0.05))
+    # Lucas-Kanade's two tracks (the matched features, the default on photographs, keep 89 there)
+    analysis = analyze(folder, AnalysisConfig(fixation_px=None, start_s=times_s[45] - 0.05, end_s=times_s[74] + 0.05,
+                                              tracker_kind="klt"))
     assert analysis.quality == "weak" and analysis.tracks_used == 2
     assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
     assert [w for w in analysis.warnings if "the axis was found from 2 tracks" in w]

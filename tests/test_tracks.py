@@ -46,5 +46,6 @@ def test_videos_are_followed_with_the_window_laid_along_the_rows_and_stills_as_g
         assert ok
         cv2.imwrite(str(tmp_path / f"still{index:02d}.png"), image)
     capture.release()
-    tracks.read_footage(tmp_path, AnalysisConfig(fixation_px=(319.5, 179.5), fps=30.0))
+    # Lucas-Kanade by name: on stills the default matches features (tracking/matched.py)
+    tracks.read_footage(tmp_path, AnalysisConfig(fixation_px=(319.5, 179.5), fps=30.0, tracker_kind="klt"))
     assert chosen[0] is True and chosen[-1] is False
