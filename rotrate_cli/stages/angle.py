@@ -39,11 +39,6 @@ def picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFram
             # the picture turns little (a cylinder seen from 15 degrees above: a search of 10 s
             # that found no plane)
             return None
-    if view is None and view_tracks is not None and len(view_tracks) > 1 and not not_side_view(None, view_tracks):
-        # no path tells the view, and the tracks' steps run along one line (:func:`not_side_view`):
-        # a side view, whose picture does not turn (an EPFL car's photographs: a 6-s search for
-        # a plane that is not there)
-        return None
     # (no track at all tells no view: the picture's own changes are the only evidence)
     width = footage.info.width_px
     kept = footage.pairs.angle_frames.frames

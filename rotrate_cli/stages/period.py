@@ -186,6 +186,8 @@ class Thumbnails:
         self._times: list[float] = []
         self._levels: list[float] = []  # each thumbnail's mean brightness, before the light's steadying
         self._light = SteadyLight()
+        #: the thumbnails' rows and columns (None before the first)
+        self.shape: tuple[int, int] | None = None
 
     def tap(self, frames: Iterator[Frame]) -> Iterator[Frame]:
         """Yield ``frames`` unchanged, keeping a thumbnail of each (grey or BGR images)."""
@@ -207,6 +209,7 @@ class Thumbnails:
         self._levels.append(float(cv2.mean(small)[0]))
         if self.steady_light:
             small = self._light.steadied(small)
+        self.shape = (int(small.shape[0]), int(small.shape[1]))
         self._images.append(small.ravel())
         self._times.append(float(time_s))
 

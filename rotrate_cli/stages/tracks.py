@@ -155,6 +155,10 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     tracks = by_track(run.tracks)
     release_free_memory()  # the tracker's store and the frames' buffers are gone
     shaken = None if config.points_px else find_shake(tracks, run.frames, 1.0 / scale, (info.width_px, info.height_px))
+    if shaken is not None and shaken[1].smooth and not _rim_moves(thumbnails):
+        # a smooth turn of the whole picture whose rim stands still: a face-on disc turning before
+        # a still background, not a camera that rolls (a rendered checkered disc read -9%)
+        shaken = None
     if shaken is not None:
         # a hand-held camera: track again knowing its motion, so that the still background is let
         # go of as on a tripod and the points go to the body; the positions as a still camera saw them
@@ -202,6 +206,31 @@ def _shake_note(shake: Shake) -> str:
     return (f"the camera {moved} ({shake.rms_px:.1f} px rms, at most {shake.largest_px:.1f} px{turn}): the frames and "
             f"tracks are measured as a still camera would see them, from {shake.background_tracks} still background "
             "tracks")
+
+
+#: The picture's rim: this share of its width and height on every side (of the thumbnails).
+RIM_SHARE = 0.1
+#: A rim that moves: it differs between the clip's first and last frames by this many times its
+#: typical change from one frame to the next, and by this many grey levels at least.
+RIM_MOVES = 3.0
+RIM_LEVELS = 2.0
+
+
+def _rim_moves(thumbnails: Thumbnails) -> bool:
+    """True where the picture's rim changes over the clip (a camera that turns moves all of its
+    picture, the rim too), more than from one frame to the next (its noise)."""
+    images = thumbnails.images
+    if len(images) < 3 or thumbnails.shape is None:
+        return True  # nothing to tell by: as found
+    height, width = thumbnails.shape
+    grid = images.reshape(len(images), height, width).astype(np.float32)
+    rim = np.ones((height, width), bool)
+    dy, dx = max(1, int(RIM_SHARE * height)), max(1, int(RIM_SHARE * width))
+    rim[dy:height - dy, dx:width - dx] = False
+    values = grid[:, rim]
+    over_clip = float(np.mean(np.abs(values[-1] - values[0])))
+    step = float(np.median(np.mean(np.abs(np.diff(values, axis=0)), axis=1)))
+    return over_clip > max(RIM_MOVES * step, RIM_LEVELS)
 
 
 def matched_tracks(config: AnalysisConfig, info: VideoInfo) -> bool:
