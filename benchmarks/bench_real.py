@@ -96,6 +96,14 @@ def parts() -> list[Case]:
         for photographs in (30, 50, 70):
             found.append(Case(f"epfl_cars/{folder.name} first {photographs} photographs", folder, truth["omega_rad_s"],
                               math.inf, truth["direction"], end_s=(photographs - 0.5) * step_s))
+    dinosaur = DATA / "dinosaur"
+    if (dinosaur / "truth.json").exists():
+        # 90, 140 and 180 degrees of the turntable (issue 49: within 1%, good)
+        truth = json.loads((dinosaur / "truth.json").read_text())
+        for photographs in DINOSAUR_PHOTOGRAPHS:
+            found.append(Case(f"dinosaur first {photographs} photographs (--fps 1)", dinosaur / "frames",
+                              truth["radians_per_frame"], math.inf, truth["direction"], fps=1.0,
+                              end_s=photographs - 0.5))
     videos = DATA / "real_videos"
     for name, spans in (("record_oblique_closeup", ((0.0, 1.5), (0.0, 4.0), (10.0, 14.0))),
                         ("bicycle_wheel_frontal", ((0.0, 2.5), (0.0, 5.0), (3.0, 13.0)))):
@@ -119,6 +127,8 @@ def parts() -> list[Case]:
     return found
 
 
+#: The dinosaur's first photographs, as parts.
+DINOSAUR_PHOTOGRAPHS = (9, 14, 18)
 #: Parts under a turn of the record and the wheel: these shares of a turn, from these times (and 5 s on).
 UNDER_TURN_SHARES = (0.3, 0.6, 0.9)
 UNDER_TURN_START_S = {"record_oblique_closeup": 0.0, "bicycle_wheel_frontal": 0.3}
