@@ -104,6 +104,13 @@ def test_a_face_turning_as_one_picture_is_not_taken_for_a_shaking_camera() -> No
     """The top of a cylinder seen from high above turns as one picture: its points stand still
     once that turn is taken out, as a shaken background would. Its path is smooth (a rendered
     one jolted only by its noise, 0.16 px in 19 px rms), a hand's is not."""
+    tracks, frames = _cylinder_top()
+    assert find_shake(tracks, frames) is None
+
+
+def _cylinder_top() -> tuple[pd.DataFrame, int]:
+    """Points of a cylinder's top seen from high above, turning as one picture (sorted by track
+    then frame), and the frames."""
     rng = np.random.default_rng(4)
     frames, points = 60, 30
     radius, phase = rng.uniform(20, 150, points), rng.uniform(0, 2 * math.pi, points)
@@ -114,7 +121,7 @@ def test_a_face_turning_as_one_picture_is_not_taken_for_a_shaking_camera() -> No
         y = 200 + radius * np.sin(angle) + rng.normal(0, 0.3, points)
         rows += [(k, k / 30.0, track, x[track], y[track]) for track in range(points)]
     tracks = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
-    assert find_shake(tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True), frames) is None
+    return tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True), frames
 
 
 
@@ -159,15 +166,5 @@ def test_a_camera_that_rolls_smoothly_is_found_where_its_still_points_lie_all_ro
 def test_a_smooth_turn_of_points_in_one_patch_is_not_taken_for_a_rolling_camera() -> None:
     """The cylinder's top of the test above, its picture's size now known: its points lie in one
     patch of the picture, not all over it."""
-    rng = np.random.default_rng(4)
-    frames, points = 60, 30
-    radius, phase = rng.uniform(20, 150, points), rng.uniform(0, 2 * math.pi, points)
-    rows = []
-    for k in range(frames):
-        angle = phase + 0.2 * k / 30.0
-        x = 300 + radius * np.cos(angle) + rng.normal(0, 0.3, points)
-        y = 200 + radius * np.sin(angle) + rng.normal(0, 0.3, points)
-        rows += [(k, k / 30.0, track, x[track], y[track]) for track in range(points)]
-    tracks = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
-    tracks = tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True)
+    tracks, frames = _cylinder_top()
     assert find_shake(tracks, frames, size_px=(1280, 720)) is None

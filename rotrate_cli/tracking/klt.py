@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import statistics
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 import cv2
@@ -782,18 +782,32 @@ def track_frames(
     """
     tracker = (kind or KltTracker)(frame_size_px, config)
     tracker.camera = camera
-    count = 0
-    first_time_s = last_time_s = float("nan")
-    for frame in frames:
+    tally = Tally()
+    for frame in tally.counted(frames, progress):
         tracker.update(frame.index, frame.time_s, frame.image)
-        if count == 0:
-            first_time_s = frame.time_s
-        last_time_s = frame.time_s
-        count += 1
-        if progress is not None:
-            progress(count, frame.time_s)
     notes: tuple[str, ...] = ()
     if tracker.kept_one_in > 1:
         notes = (f"a long clip: one track in {tracker.kept_one_in} is kept for the fits, evenly over the clip, "
                  "to bound memory",)
-    return TrackingRun(tracker.tracks(), count, first_time_s, last_time_s, notes)
+    return TrackingRun(tracker.tracks(), tally.count, tally.first_time_s, tally.last_time_s, notes)
+
+
+@dataclass
+class Tally:
+    """The frames a tracker consumed: how many, the first's and the last's times (NaN before any)."""
+
+    count: int = 0
+    first_time_s: float = float("nan")
+    last_time_s: float = float("nan")
+
+    def counted(self, frames: Iterable[Frame], progress: Callable[[int, float], None] | None = None
+                ) -> Iterator[Frame]:
+        """``frames``, counted as they pass, with ``progress`` called after each (count, time)."""
+        for frame in frames:
+            yield frame
+            if self.count == 0:
+                self.first_time_s = frame.time_s
+            self.last_time_s = frame.time_s
+            self.count += 1
+            if progress is not None:
+                progress(self.count, frame.time_s)

@@ -15,14 +15,13 @@ A track is a feature followed by its matches from photograph to photograph.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterable
 
 import cv2
 import numpy as np
 
 from rotrate_cli.runtime.lazy import pandas as pd
-from rotrate_cli.tracking.klt import TrackingRun
+from rotrate_cli.tracking.klt import Tally, TrackingRun
 from rotrate_cli.video.frames import Frame
 
 #: Features sought per photograph, at most.
@@ -48,9 +47,8 @@ def match_frames(frames: Iterable[Frame], scale: float,
     previous: tuple[Frame, np.ndarray, np.ndarray | None] | None = None
     track_of: dict[int, int] = {}
     next_track = 0
-    count = 0
-    first_time_s = last_time_s = math.nan
-    for frame in frames:
+    tally = Tally()
+    for frame in tally.counted(frames, progress):
         points, descriptors = _features(sift, frame.image, scale)
         current_track: dict[int, int] = {}
         if previous is not None and previous[2] is not None and descriptors is not None:
@@ -67,17 +65,11 @@ def match_frames(frames: Iterable[Frame], scale: float,
                 rows.append((frame.index, frame.time_s, track, float(x), float(y)))
         track_of = current_track
         previous = (frame, points, descriptors)
-        if count == 0:
-            first_time_s = frame.time_s
-        last_time_s = frame.time_s
-        count += 1
-        if progress is not None:
-            progress(count, frame.time_s)
     tracks = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
     tracks = tracks.astype({"frame": np.int64, "time_s": np.float64, "track": np.int64,
                             "x_px": np.float32, "y_px": np.float32})
     tracks = tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True)
-    return TrackingRun(tracks, count, first_time_s, last_time_s)
+    return TrackingRun(tracks, tally.count, tally.first_time_s, tally.last_time_s)
 
 
 def _features(sift: cv2.SIFT, image: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray | None]:
