@@ -23,7 +23,8 @@ def test_dinosaur_photographs_within_two_percent() -> None:
     assert result.frames == 36
 
 
-@pytest.mark.parametrize("photographs", [9, 14, 18])
+@pytest.mark.parametrize("photographs", [pytest.param(9, marks=pytest.mark.slow), 14,
+                                         pytest.param(18, marks=pytest.mark.slow)])  # 9 and 18: make test-slow
 def test_dinosaur_under_a_turn_from_its_matched_features(photographs: int) -> None:
     """90, 140 and 180 degrees of the turntable, the axis found: Lucas-Kanade kept few points for
     more than a photograph or two (10 degrees apart) and none from the first four (no result,

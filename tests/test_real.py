@@ -307,7 +307,7 @@ def test_the_record_turns_clockwise_seen_from_above() -> None:
     assert analysis.direction == "cw" and analysis.direction_in_picture
 
 
-@pytest.mark.parametrize("size", [0.5, 0.25])
+@pytest.mark.parametrize("size", [pytest.param(0.5, marks=pytest.mark.slow), 0.25])  # half size: make test-slow
 def test_the_wheel_filmed_small_is_measured(tmp_path: Path, size: float) -> None:
     """At 256x192 "no point could be tracked": the tracker's window (21 px long) seeds only where
     it lies wholly on moving pixels, and the wheel's thin spokes left 24 corners in the whole

@@ -66,7 +66,10 @@ def test_two_rendered_bodies_are_measured_each_within_two_percent() -> None:
     assert analysis.omega_rad_s == analysis.bodies[0].omega_rad_s  # the headline is the largest body
 
 
-@pytest.mark.parametrize(("clip", "options"), [("box_ortho", {}), ("box_perspective", {"fov_deg": 25.0})])
+@pytest.mark.parametrize(("clip", "options"), [
+    ("box_ortho", {}),
+    pytest.param("box_perspective", {"fov_deg": 25.0}, marks=pytest.mark.slow),  # make test-slow
+])
 def test_a_single_body_clip_segments_into_one_body(clip: str, options: dict) -> None:
     path = SAMPLES / f"{clip}.mp4"
     analysis = analyze(path, AnalysisConfig(fixation_px=None, segment=True, **options))

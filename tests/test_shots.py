@@ -130,7 +130,7 @@ def test_a_fade_is_found_and_a_flicker_or_a_turning_body_is_not() -> None:
     assert fades(images.mean(axis=1), images) == (0, 0)
 
 
-@pytest.mark.parametrize("over_frames", [20, 60])
+@pytest.mark.parametrize("over_frames", [20, pytest.param(60, marks=pytest.mark.slow)])  # 60: make test-slow
 def test_a_clip_that_fades_in_is_measured_once_its_light_is_steady(tmp_path, over_frames: int) -> None:
     """A box fading in from black over two thirds of a second read -39% (weak, its interval
     missing the truth): Lucas-Kanade takes a point's brightness to stay as it was, and the light's
