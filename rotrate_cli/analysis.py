@@ -37,12 +37,14 @@ from rotrate_cli.stages.camera import lens_from, method_name
 from rotrate_cli.stages.checks import Checked, check_rate
 from rotrate_cli.stages.fits import (
     RateResult,
+    decided_sense,
     no_result_message,
     rates_from_offsets,
     running_measure,
     sample_rates,
     sample_spacing,
     thin,
+    with_sense,
 )
 from rotrate_cli.stages.geometry import Geometry, locate, measure
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
@@ -265,7 +267,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     series = None
     if config.window_s is not None:
         series = rate_series(checked.result.offsets, config.window_s,
-                             running_measure(config.method, config.rejection, geometry.camera(size_px)))
+                             running_measure(config.method, config.rejection,
+                                             with_sense(geometry.camera(size_px), decided_sense(checked.result))))
     try:
         return _result(footage, config, geometry, checked, period, view_tracks, series=series, tracks=kept)
     finally:

@@ -274,6 +274,15 @@ def _fit_batch(
     the perspective model in the given ``sense`` (+1 anticlockwise, -1 clockwise), or with
     ``sense=0`` in both, keeping the better one per track.
     """
+    return _fit_batch_senses(time_s, offset, mask, camera, (sense,), iterations)[0]
+
+
+def _fit_batch_senses(
+    time_s: np.ndarray, offset: np.ndarray, mask: np.ndarray, camera: Camera | None, senses: tuple[int, ...],
+    iterations: int = 20,
+) -> list[list[TrackFit]]:
+    """:func:`_fit_batch` in each of ``senses`` (one list of fits per sense), the orthographic fit
+    that starts them all made once (it was half of the fits in both senses)."""
     weight = mask.astype(float)
     n = weight.sum(axis=1)
     t_mean = (time_s * weight).sum(axis=1) / n
@@ -324,25 +333,33 @@ def _fit_batch(
     params = _gauss_newton(np.column_stack([a, b, best]), _orthographic(t_unit, weight), y_unit, iterations)
     params[:, :2] *= unit[:, None]  # back to the offsets' units
     params[:, 2] /= period  # and to rad/s
-    scale = 1.0
-    model = _orthographic(t, weight)
-    target = y
-    if camera is not None:
-        # normalised image coordinates relative to the principal point; the orthographic fit
-        # (A, B, w) is the same motion as (A, -B, -w): start the pinhole model from both senses
-        scale = camera.focal_px
-        target = (offset / scale + camera.axis_n) * weight
-        model = _pinhole(t, weight, camera.axis_n, camera.depth_scale)
+    if camera is None:
+        return [_finish(params, _orthographic(t, weight), y, 1.0, None, valid, n, mask, time_s)]
+    # normalised image coordinates relative to the principal point; the orthographic fit
+    # (A, B, w) is the same motion as (A, -B, -w): start the pinhole model from both senses
+    scale = camera.focal_px
+    target = (offset / scale + camera.axis_n) * weight
+    model = _pinhole(t, weight, camera.axis_n, camera.depth_scale)
+    fits = []
+    for sense in senses:
         if sense == 0:
             starts = [params / [scale, scale, 1.0], params * [1.0 / scale, -1.0 / scale, -1.0]]
             fitted = [_gauss_newton(start, model, target, iterations) for start in starts]
             costs = [((target - model(fit, _ALL)[0]) ** 2).sum(1) for fit in fitted]
-            params = np.where((costs[0] <= costs[1])[:, None], fitted[0], fitted[1])
+            sensed = np.where((costs[0] <= costs[1])[:, None], fitted[0], fitted[1])
         else:  # a sense decided for the whole body (see fit_tracks)
             flip = 1.0 if sense > 0 else -1.0
             start = params * [1.0 / scale, 1.0 / scale, 1.0]
             start[:, 1:] *= np.where(start[:, 2:3] * flip < 0, -1.0, 1.0)
-            params = _gauss_newton(start, model, target, iterations)
+            sensed = _gauss_newton(start, model, target, iterations)
+        fits.append(_finish(sensed, model, target, scale, camera, valid, n, mask, time_s))
+    return fits
+
+
+def _finish(params: np.ndarray, model: Model, target: np.ndarray, scale: float, camera: Camera | None,
+            valid: np.ndarray, n: np.ndarray, mask: np.ndarray, time_s: np.ndarray) -> list[TrackFit]:
+    """The fits of a batch from its fitted ``params``: each rate's standard error, misfit and
+    amplitude (in pixels: ``scale``), and the arc it turned through."""
     predicted, jacobian = model(params, _ALL)
     residual = target - predicted
     jtj = jacobian.transpose(0, 2, 1) @ jacobian
@@ -414,12 +431,12 @@ def fit_tracks(samples: pd.DataFrame, min_samples: int = 4, camera: Camera | Non
     says the sense (``Camera.sense``), the tracks are fitted in that sense only.
     """
     if camera is None:
-        return _fit_all(samples, min_samples, None, 0)
+        return _fit_all(samples, min_samples, None, (0,))[0]
     if camera.sense:  # the view told it: seen from above, by the way the paths go round
-        told = _fit_all(samples, min_samples, camera, camera.sense)
+        told = _fit_all(samples, min_samples, camera, (camera.sense,))[0]
         return {k: replace(fit, sense=float(camera.sense) if math.isfinite(fit.omega_rad_s) else math.nan)
                 for k, fit in told.items()}
-    fits = {sense: _fit_all(samples, min_samples, camera, sense) for sense in (1, -1)}
+    fits = dict(zip((1, -1), _fit_all(samples, min_samples, camera, (1, -1)), strict=True))
     evidence, voters = _sense_evidence(fits[1], fits[-1], samples.groupby("track", sort=False).size())
     chosen = 1 if evidence >= 0 else -1
     decided = abs(evidence) >= max(SENSE_EVIDENCE, SENSE_EVIDENCE_PER_ROOT_TRACK * math.sqrt(voters))
@@ -440,15 +457,18 @@ def _pad(times: np.ndarray, offsets: np.ndarray, parts: list[slice]) -> tuple[np
     return time_s, offset, mask
 
 
-def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None, sense: int) -> dict[int, TrackFit]:
+def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None,
+             senses: tuple[int, ...]) -> list[dict[int, TrackFit]]:
+    """Every track's fit in each of ``senses`` (see :func:`_fit_batch_senses`), keyed by track."""
     tracks = samples["track"].to_numpy()
     times = samples["time_s"].to_numpy(dtype=float)
     offsets = samples["offset_px"].to_numpy(dtype=float)
-    fits: dict[int, TrackFit] = {}
+    fits: list[dict[int, TrackFit]] = [{} for _ in senses]
     parts = []
     for part in _track_slices(tracks):
         if part.stop - part.start < max(min_samples, 4):
-            fits[int(tracks[part.start])] = _FAILED
+            for sensed in fits:
+                sensed[int(tracks[part.start])] = _FAILED
         else:
             parts.append(part)
     parts.sort(key=lambda p: p.stop - p.start)
@@ -465,12 +485,13 @@ def _fit_all(samples: pd.DataFrame, min_samples: int, camera: Camera | None, sen
             index += 1
         batches.append(batch)
 
-    def fit(batch: list[slice]) -> list[TrackFit]:
-        return _fit_batch(*_pad(times, offsets, batch), camera, sense)
+    def fit(batch: list[slice]) -> list[list[TrackFit]]:
+        return _fit_batch_senses(*_pad(times, offsets, batch), camera, senses)
 
     # numpy lets go of the interpreter inside its array loops: two batches at once use both cores
     with ThreadPoolExecutor(max_workers=_FIT_THREADS) as pool:
         for batch, batch_fits in zip(batches, pool.map(fit, batches), strict=True):
-            for part, track_fit in zip(batch, batch_fits, strict=True):
-                fits[int(tracks[part.start])] = track_fit
+            for sensed, sense_fits in zip(fits, batch_fits, strict=True):
+                for part, track_fit in zip(batch, sense_fits, strict=True):
+                    sensed[int(tracks[part.start])] = track_fit
     return fits

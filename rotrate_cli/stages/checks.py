@@ -21,7 +21,15 @@ from rotrate_cli.scene import axis as axes
 from rotrate_cli.scene.focal import ORTHOGRAPHIC_WIDTHS
 from rotrate_cli.scene.view import rate_from_paths, view_from_paths
 from rotrate_cli.stages.camera import WIDEST_FOV_DEG, Lens, camera_at
-from rotrate_cli.stages.fits import JOINT_MIN_TRACKS, RateResult, changes, half_rates, rates_from_offsets
+from rotrate_cli.stages.fits import (
+    JOINT_MIN_TRACKS,
+    RateResult,
+    changes,
+    followed_up,
+    half_rates,
+    rates_from_offsets,
+    rejoined,
+)
 from rotrate_cli.stages.geometry import AxisSpread, Geometry, inliers_and_rate
 from rotrate_cli.stages.verdict import MIN_TRACKS, WEAK_HALF_WIDTH
 
@@ -86,7 +94,7 @@ def check_rate(result: RateResult, geometry: Geometry, config: AnalysisConfig, s
     told = told_sense_doubt(result, camera, geometry.lens.told_sense)
     if told is not None:
         doubts += (told,)
-    change = rate_change(result, config.method, config.rejection, camera)
+    change = rate_change(result, config.method, config.rejection, camera, geometry.halves)
     if change is not None:
         doubts += (change,)
     sides = sides_disagree(result)
@@ -548,8 +556,10 @@ def with_lens_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, fl
     for inverse in ends:
         end = replace(lens, focal_px=1.0 / inverse if inverse > 0 else None)
         camera = camera_at(end, size_px, fixation_px, angle_deg)
-        rates_at_ends.append(rates_from_offsets(result.offsets, method, rejection, camera)
-                             .combined.omega_rad_s)
+        if method == "fit":  # the same tracks, the same weights, through the other lens
+            rates_at_ends.append(rejoined(result, result.offsets, rejection, camera))
+        else:
+            rates_at_ends.append(rates_from_offsets(result.offsets, method, rejection, camera).combined.omega_rad_s)
     combined = result.combined
     # where the paper's orthographic camera is one end, it is as likely as the lens found, and its
     # rate carries the tracks' own scatter too (an orthographic noisy sphere, 0.38 of a turn: a
@@ -587,8 +597,9 @@ def with_height_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, 
     if (result.combined.tracks_used == 0 or lens.focal_px is None or lens.source != "exif"
             or math.isfinite(lens.elevation_deg)):
         return result
-    camera = camera_at(replace(lens, elevation_deg=HEIGHT_DOUBT_DEG), size_px, fixation_px, angle_deg)
-    rate = rates_from_offsets(result.offsets, method, rejection, camera).combined.omega_rad_s
+    offsets, camera = followed_up(result, camera_at(replace(lens, elevation_deg=HEIGHT_DOUBT_DEG), size_px,
+                                                    fixation_px, angle_deg))
+    rate = rates_from_offsets(offsets, method, rejection, camera).combined.omega_rad_s
     if not math.isfinite(rate):
         return result
     # as likely as the level camera's, its rate carries the tracks' own scatter too
@@ -600,9 +611,12 @@ def with_height_doubt(result: RateResult, lens: Lens, fixation_px: tuple[float, 
                                             omega_high_rad_s=max(combined.omega_high_rad_s, rate + above)))
 
 
-def rate_change(result: RateResult, method: str, rejection: RejectionConfig, camera: Camera | None) -> str | None:
-    """A line saying the rate changes over the clip (see :func:`changes`); None otherwise."""
-    halves = half_rates(result, method, rejection, camera)
+def rate_change(result: RateResult, method: str, rejection: RejectionConfig, camera: Camera | None,
+                halves: tuple[Combined, Combined, float, float] | None = None) -> str | None:
+    """A line saying the rate changes over the clip (see :func:`changes`); None otherwise.
+    ``halves``: the halves' rates where they were measured already (:attr:`Geometry.halves`)."""
+    if halves is None:
+        halves = half_rates(result, method, rejection, camera)
     if halves is None or not changes(result.combined, *halves):
         return None
     early, late = halves[0], halves[1]

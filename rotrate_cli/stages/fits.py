@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -274,19 +274,66 @@ def no_result_message(features: pd.DataFrame) -> str:
             "try a longer clip, `roi` around the object, or check `fixation_px`")
 
 
+def decided_sense(result: RateResult) -> int:
+    """The sense of rotation the inlier tracks' fits through a lens decided (+1 anticlockwise,
+    -1 clockwise; see :func:`rotrate_cli.fitting.estimators.fit_tracks`), 0 where they did not."""
+    senses = result.features.loc[result.features["inlier"], "sense"].to_numpy(dtype=float)
+    senses = senses[np.isfinite(senses)]
+    return int(np.sign(senses.sum())) if len(senses) else 0
+
+
+def with_sense(camera: Camera | None, sense: int) -> Camera | None:
+    """``camera`` told the body's sense of rotation, so that fits through it try that sense only
+    (half the work); as it is where it is orthographic, already told, or ``sense`` is 0."""
+    if camera is None or camera.sense or not sense:
+        return camera
+    return replace(camera, sense=sense)
+
+
+def followed_up(result: RateResult, camera: Camera | None) -> tuple[pd.DataFrame, Camera | None]:
+    """The offsets and camera that a second look at a measured ``result`` fits (its halves, the
+    ends of the lens's range, another height): its inlier tracks only, in the sense their fits
+    decided. A track the first fit rejected (a slide, a reflection, the background) is not one the
+    second look should weigh, and fitting 1,700 tracks in both senses again, several times, took
+    most of a textured box's analysis (issue 50)."""
+    inliers = result.features.loc[result.features["inlier"], "track"]
+    offsets = result.offsets
+    if len(inliers) < len(result.features):
+        offsets = offsets[offsets["track"].isin(inliers)].reset_index(drop=True)
+    return offsets, with_sense(camera, decided_sense(result))
+
+
+def rejoined(result: RateResult, offsets: pd.DataFrame, rejection: RejectionConfig, camera: Camera | None) -> float:
+    """The rate of ``result``'s inlier tracks measured again from ``offsets`` (the same samples
+    about an axis point moved a little, or seen through another lens) by their joint fit alone:
+    each track keeps the noise and the sense its own fit found, and none is judged again. A
+    derivative (the rate per pixel of the axis's place) or an end of a range (the lens's) wants
+    the same tracks, and fitting and judging 1,700 tracks again for each took a second of a
+    textured box's analysis (issue 50). Where the tracks are too few for a joint fit they are
+    all fitted again; NaN where no rate is found."""
+    used = result.features[result.features["inlier"]]
+    if len(used) < JOINT_MIN_TRACKS or not math.isfinite(result.combined.omega_rad_s):
+        return rates_from_offsets(offsets, "fit", rejection, camera).combined.omega_rad_s
+    if not _sorted_by_track_and_time(offsets):
+        offsets = offsets.sort_values(["track", "time_s"], kind="stable").reset_index(drop=True)
+    combined = _joint(offsets, used, result.combined, rejection, camera, SENSES.get(result.direction, 0))
+    return math.nan if combined is result.combined else combined.omega_rad_s
+
+
 def half_rates(result: RateResult, method: str, rejection: RejectionConfig,
                camera: Camera | None) -> tuple[Combined, Combined, float, float] | None:
-    """The rates of the clip's first and second halves (same tracks, same rules) and the middle
-    time of each; None where a half gives no rate."""
+    """The rates of the clip's first and second halves (the whole's inlier tracks, in its sense,
+    same rules) and the middle time of each; None where a half gives no rate."""
     if method != "fit" or result.combined.tracks_used < JOINT_MIN_TRACKS:
         return None
-    times = result.offsets["time_s"].to_numpy()
+    offsets, camera = followed_up(result, camera)
+    times = offsets["time_s"].to_numpy()
     first, last = float(times.min()), float(times.max())
     middle = 0.5 * (first + last)
     halves = []
     for part in (times <= middle, times > middle):
         try:
-            halves.append(rates_from_offsets(result.offsets[part], method, rejection, camera).combined)
+            halves.append(rates_from_offsets(offsets[part], method, rejection, camera).combined)
         except (ValueError, IndexError):
             return None
     if not all(h.tracks_used > 0 and math.isfinite(h.omega_rad_s) for h in halves):

@@ -30,7 +30,17 @@ from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.scene import axis as axes
 from rotrate_cli.scene.view import View
 from rotrate_cli.stages.camera import Lens, camera_at, find_lens, lens_from
-from rotrate_cli.stages.fits import SENSES, RateResult, changes, half_rates, rates_from_offsets, thin
+from rotrate_cli.stages.fits import (
+    SENSES,
+    RateResult,
+    changes,
+    decided_sense,
+    half_rates,
+    rates_from_offsets,
+    rejoined,
+    thin,
+    with_sense,
+)
 from rotrate_cli.stages.tracks import MIN_TRACKS_FOR_ANGLE
 from rotrate_cli.tracking.keyframes import Keyframes
 from rotrate_cli.video.frames import VideoInfo
@@ -117,6 +127,9 @@ class Geometry:
         axis_spread: how well a found fixation is placed across the axis and what that does to
             the tracks' rate (:func:`measure`); None where it was given, or the rate is the clip's
             repetition (which needs no axis).
+        halves: the rates of the clip's halves measured about the found fixation, by
+            :func:`rotrate_cli.stages.fits.half_rates` (:func:`measure` asks them whether the
+            rate changes: the checks need not measure them again); None where not measured.
     """
 
     axis_angle_deg: float
@@ -128,6 +141,7 @@ class Geometry:
     view: View | None = None
     notes: tuple[str, ...] = ()
     axis_spread: AxisSpread | None = None
+    halves: tuple[Combined, Combined, float, float] | None = None
 
     def camera(self, size_px: tuple[int, int]) -> Camera | None:
         """The pinhole camera about the fixation point, or None (orthographic)."""
@@ -259,13 +273,22 @@ def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size
     first = geometry.fixation_px
     angle = geometry.axis_angle_deg
 
-    def measured(point: tuple[float, float]) -> tuple[RateResult, Camera | None]:
+    sense = 0  # the sense of rotation, once the first fit has told it
+
+    def offsets_at(point: tuple[float, float]) -> pd.DataFrame:
         moved = body.positions is not None and point != first
-        offset = axes.offsets_along(body.positions, point, angle) if moved else body.offsets_px
+        return body.offsets(axes.offsets_along(body.positions, point, angle) if moved else body.offsets_px)
+
+    def measured(point: tuple[float, float]) -> tuple[RateResult, Camera | None]:
+        offset = offsets_at(point)
         camera = camera_at(geometry.lens, size_px, point, angle)
-        return rates_from_offsets(body.offsets(offset), config.method, config.rejection, camera), camera
+        # about a point moved by a pixel or so the body turns the same way: the sense the first fit
+        # decided is not asked again (each fit in both senses is two of all the tracks' fits)
+        result = rates_from_offsets(offset, config.method, config.rejection, with_sense(camera, sense))
+        return result, camera
 
     result, camera = measured(first)
+    sense = decided_sense(result)
     release_free_memory()
     fixation = first
     refine = geometry.fixation_found and config.method == "fit"
@@ -279,6 +302,7 @@ def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size
         fixation, result, camera = _refine_fixation(result, camera, fixation, angle, measured,
                                                     steps=STEADY_REFINE_STEPS if known_steady else REFINE_STEPS)
         change = None if known_steady else half_rates(result, config.method, config.rejection, camera)
+        halves = change
         if change is not None and changes(result.combined, *change):
             # a spinning-up body: one rate for all tracks misplaces the axis; the turn's angle
             # as it speeds up (from the halves' rates) does not. Once: measuring the halves again
@@ -286,10 +310,20 @@ def measure(body: PreparedBody, geometry: Geometry, config: AnalysisConfig, size
             moved = _refine_fixation(result, camera, fixation, angle, measured, spin_up=change)
             if moved[1].combined.tracks_used >= SPIN_UP_KEEPS * result.combined.tracks_used:
                 fixation, result, camera = moved
+                halves = None  # measured about the axis before it moved
     spread = None
     if refine and not known_steady:
-        spread = _axis_spread(result, camera, fixation, angle, measured)
-    return replace(geometry, fixation_px=(float(fixation[0]), float(fixation[1])), axis_spread=spread), result
+        measured_result = result
+
+        def rate_at(point: tuple[float, float]) -> float:
+            camera_there = camera_at(geometry.lens, size_px, point, angle)
+            return rejoined(measured_result, offsets_at(point), config.rejection, camera_there)
+
+        spread = _axis_spread(result, camera, fixation, angle, rate_at)
+    else:
+        halves = None
+    return replace(geometry, fixation_px=(float(fixation[0]), float(fixation[1])), axis_spread=spread,
+                   halves=halves), result
 
 
 #: The found axis point is moved by its standard error, and at least this much (px), to measure
@@ -311,22 +345,23 @@ STEADY_REFINE_STEPS = 2
 
 def _axis_spread(
     result: RateResult, camera: Camera | None, fixation: tuple[float, float], angle_deg: float,
-    measured: Callable[[tuple[float, float]], tuple[RateResult, Camera | None]],
+    rate_at: Callable[[tuple[float, float]], float],
 ) -> AxisSpread | None:
     """How well the found ``fixation`` is placed across the axis (the inlier tracks' shared-axis
     least squares, its jackknife standard error over tracks) and the rate's change per pixel
-    across it, measured about the point moved by that much; None where either cannot be had
-    (see :func:`rotrate_cli.stages.checks.with_axis_doubt`)."""
+    across it, measured about the point moved by that much (``rate_at``: the same tracks' rate
+    about a point); None where either cannot be had (see
+    :func:`rotrate_cli.stages.checks.with_axis_doubt`)."""
     offsets, omega, placing = inliers_and_rate(result, camera)
     se_px = axes.axis_offset_se(offsets, omega, placing)
     if not (math.isfinite(se_px) and math.isfinite(result.combined.omega_rad_s)):
         return None
     step = max(se_px, SPREAD_STEP_PX)
     ux, uy = axes.unit_offset(angle_deg)
-    moved, _ = measured((fixation[0] + step * ux, fixation[1] + step * uy))
-    if not math.isfinite(moved.combined.omega_rad_s):
+    moved = rate_at((fixation[0] + step * ux, fixation[1] + step * uy))
+    if not math.isfinite(moved):
         return None
-    rate_per_px = (moved.combined.omega_rad_s - result.combined.omega_rad_s) / step
+    rate_per_px = (moved - result.combined.omega_rad_s) / step
     # the axis's place as the rate moves (a relative step either way of the signed rate the
     # axis is placed with, which is the reported rate times a constant sign)
     higher = axes.refine_axis_offset(offsets, omega * (1.0 + COUPLING_STEP), placing)
