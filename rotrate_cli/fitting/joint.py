@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -45,14 +47,34 @@ _GRID = (0.06, 25)
 _WIDE_GRID = (0.3, 61)
 #: Relative steps of the parabola polishing the summed misfit's minimum.
 _POLISH_STEPS = (1e-3, 2e-4)
-#: Samples per block when evaluating misfits (bounds the temporaries' memory).
+#: Samples per block when evaluating misfits (bounds the temporaries' memory), and blocks worked
+#: on at once.
 _BLOCK_SAMPLES = 1 << 14
+_THREADS = 2
 #: Groups per split for the grouped jackknife, and the fewest tracks per group it needs.
 GROUPS = 5
 _MIN_PER_GROUP = 3
 
 
-def _block_misfits(block: Ragged, cos_t: np.ndarray, sin_t: np.ndarray, camera: Camera | None) -> np.ndarray:
+@dataclass(frozen=True)
+class _Block:
+    """A block of tracks with what its misfits need at every trial rate, made once: the target
+    (offsets, or through a pinhole their normalised image positions) and, through a pinhole, the
+    positions that scale the depth term."""
+
+    tracks: Ragged
+    target: np.ndarray
+    x: np.ndarray | None
+
+    @classmethod
+    def of(cls, block: Ragged, camera: Camera | None) -> _Block:
+        if camera is None:
+            return cls(block, block.offset, None)
+        target = block.offset / camera.focal_px
+        return cls(block, target, (target + camera.axis_n) * camera.depth_scale)
+
+
+def _block_misfits(block: Ragged | _Block, cos_t: np.ndarray, sin_t: np.ndarray, camera: Camera | None) -> np.ndarray:
     """Each track's least squared misfit (in the offsets' units squared) at one rate, given the
     rate's ``cos``/``sin`` at the distinct sample times.
 
@@ -62,13 +84,15 @@ def _block_misfits(block: Ragged, cos_t: np.ndarray, sin_t: np.ndarray, camera: 
     the geometric one. Times need no centring: shifting them turns the two columns into
     combinations of each other, which leaves the misfit unchanged.
     """
+    prepared = block if isinstance(block, _Block) else _Block.of(block, camera)
+    block = prepared.tracks
     c, s_ = cos_t[block.time_index], sin_t[block.time_index]
     sums = block.sums
-    if camera is None:
-        target, first, second = block.offset, c, s_
+    target = prepared.target
+    if prepared.x is None:
+        first, second = c, s_
     else:
-        target = block.offset / camera.focal_px
-        x = (target + camera.axis_n) * camera.depth_scale
+        x = prepared.x
         first, second = c - x * s_, s_ + x * c
 
     def solve(weight2: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -151,15 +175,33 @@ def joint_fit(
     weights = np.array([1.0 / max(noise[int(i)], 1e-6) ** 2 for i in tracks.ids])
     signed = 1.0 if camera is None or sense >= 0 else -1.0
 
+    blocks = [(part, _Block.of(block, camera)) for part, block in tracks.blocks(_BLOCK_SAMPLES)]
+
     def misfits(grid: np.ndarray) -> np.ndarray:
         out = np.empty((k, len(grid)))
-        for j, omega_j in enumerate(grid):
-            angle = signed * omega_j * tracks.times_s
-            cos_t, sin_t = np.cos(angle), np.sin(angle)
-            for part, block in tracks.blocks(_BLOCK_SAMPLES):
-                out[part, j] = _block_misfits(block, cos_t, sin_t, camera)
+        angle = signed * grid[:, None] * tracks.times_s[None, :]
+        cos_t, sin_t = np.cos(angle), np.sin(angle)
+
+        def fill(part_and_block: tuple[slice, _Block]) -> None:
+            part, block = part_and_block
+            for j in range(len(grid)):
+                out[part, j] = _block_misfits(block, cos_t[j], sin_t[j], camera)
+
+        if len(blocks) == 1:
+            fill(blocks[0])
+        else:
+            list(pool.map(fill, blocks))
         return out
 
+    # numpy lets go of the interpreter in its array loops: two blocks at once use both cores
+    with ThreadPoolExecutor(max_workers=_THREADS) as pool:
+        return _joint_fit(tracks, weights, misfits, omega_guess_rad_s, span, failed)
+
+
+def _joint_fit(tracks: Ragged, weights: np.ndarray, misfits: Callable[[np.ndarray], np.ndarray],
+               omega_guess_rad_s: float, span: float, failed: Combined) -> Combined:
+    """:func:`joint_fit` once its tracks' ``misfits`` at a grid of trial rates can be had."""
+    k = len(tracks)
     rough = _locate(misfits, weights, omega_guess_rad_s, span)
     if not math.isfinite(rough):
         return failed
