@@ -214,14 +214,17 @@ def test_under_a_turn_of_the_record_the_pictures_turning_gives_the_rate() -> Non
 def test_the_record_s_tracks_in_two_groups_are_told_and_held() -> None:
     """The record's first 1.5 s, less than a turn (the repetition cannot give the rate), the axis
     found: the grooves' highlights read about 0.6 rad/s, the label's few tracks about 4, nothing
-    between. Weak, and the interval ([0, 1.39]) holds the truth, 3.55, and a warning names the
-    two groups. (About the truth's fixation the picture's turning gives the rate: above.)"""
+    between. A warning names the two groups, and they do not give the rate: the picture's own
+    turning does, its interval holding the truth, 3.55 (+3.6% within [-0.4%, +7.5%], good; the
+    interval held a view through which the changes lined up at 0.44 against 0.72, reading +35%,
+    and was weak before)."""
     clip = VIDEOS / "record_oblique_closeup.mp4"
     need(clip, "the record video")
     truth = json.loads(clip.with_suffix(".truth.json").read_text())
     analysis = analyze(clip, AnalysisConfig(fixation_px=None, end_s=1.5))
-    assert analysis.quality == "weak"
+    assert analysis.rate_from == "turning"
     assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
+    assert analysis.quality == "weak" or analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.05)
     assert [w for w in analysis.warnings if "fall into two groups" in w]
 
 
