@@ -28,6 +28,8 @@ import cv2
 import numpy as np
 
 from rotrate_cli.scene.disc import (
+    LAG_SHARES,
+    Candidate,
     DiscView,
     fitted_views,
     moving_weight,
@@ -71,6 +73,8 @@ CLOSING_DEG = 60.0
 MIN_CLOSINGS = 3
 #: ... and whose shift has no rival within its search that peaks this fraction as high.
 RIVAL_PEAK = 0.9
+#: The shifts are read to about this much (degrees: a tenth of the unrolled picture's step).
+READ_TO_DEG = 0.1 * 360.0 / ANGLES
 #: Fewer changes than this, or a turn smaller than this, tell no rate.
 MIN_CHANGES = 6
 MIN_TURNED_DEG = 15.0
@@ -86,6 +90,10 @@ MOST_TILT_DEG = 80.0
 SHORTEST_FOCAL = 0.3
 #: A rate whose interval's half is wider than this fraction of it is no measurement.
 LOOSEST = 0.5
+#: Clips that turn this far (degrees, at least and at most) have their view sought again through
+#: changes nearer together (:data:`rotrate_cli.scene.disc.LAG_SHARES`): under half a turn, half the
+#: clip apart is near enough; over one and a half, the return gives the rate.
+NEARER_LAGS_DEG = (180.0, 540.0)
 #: Views that line the picture up this nearly as well as the best (their scores' ratio) are as
 #: likely: the interval holds their readings.
 NEARLY_AS_WELL = 0.8
@@ -209,8 +217,36 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
         return None
     scale = changes[0].first.shape[1] / width_px
     pairs = [(change.first, change.second) for change in changes]
-    views = fitted_views(pairs, start.scaled(scale), step_px=0.04 * changes[0].first.shape[1],
-                         search_tilt=search_tilt, search_centre=search_centre)
+    step_px = 0.04 * pairs[0][0].shape[1]
+
+    def readings_at(shares: tuple[float, ...]) -> list[PictureAngle]:
+        return _readings(changes, fitted_views(pairs, start.scaled(scale), step_px=step_px, search_tilt=search_tilt,
+                                               search_centre=search_centre, lag_shares=shares))
+
+    readings = readings_at(LAG_SHARES[0])
+    if not readings:
+        return None
+    turned = max(angle.turned_deg for angle in readings)
+    if NEARER_LAGS_DEG[0] <= turned <= NEARER_LAGS_DEG[1]:
+        # about a turn: half the clip apart, the changes compare opposite sides of the body; the
+        # view is sought again through nearer ones too (a second search: only where it can matter)
+        readings += readings_at(LAG_SHARES[1])
+    # of views that line the picture up nearly alike, the one through which its changes line up
+    # best over the whole clip (the wheel tilted 38 degrees scored 0.48 against 0.47 face on, but
+    # its changes lined up at 0.38 against 0.65, and it read -16% against +0.6%)
+    taken = max(readings, key=lambda angle: angle.score)
+    # the interval holds the readings of the views through which the changes also line up nearly
+    # as well: a view that lines the picture up alike but its changes clearly worse is a wrong one
+    # (the record's 0.6 turn: a view tilted 63 degrees through a 280-px lens scored 0.50 against
+    # 0.63, its changes 0.55 against 0.87, and read +27% against +0.7%)
+    readings = [angle for angle in readings if angle.score >= NEARLY_AS_WELL * taken.score]
+    low = min(angle.omega_low_rad_s for angle in readings)
+    high = max(angle.omega_high_rad_s for angle in readings)
+    return replace(taken, omega_low_rad_s=low, omega_high_rad_s=high, view=taken.view.scaled(1.0 / scale))
+
+
+def _readings(changes: list[_Change], views: list[Candidate]) -> list[PictureAngle]:
+    """The readings through the views found (best first) that :func:`measure_angle` weighs."""
     # the view about the axis the tracks tell (given, or found from them: evidence the picture's
     # changes do not have), unless another lines the picture up clearly better (the record's
     # found axis lay 600 px from its spindle); views that line it up nearly as well as the one
@@ -226,21 +262,8 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
     readings = [angle for candidate in pool if (angle := _through(changes, candidate.view)) is not None]
     if not readings:  # the views taken tell no rate: the next best that does
         rest = (_through(changes, candidate.view) for candidate in views if candidate not in pool)
-        readings = [next((angle for angle in rest if angle is not None), None)]
-        if readings[0] is None:
-            return None
-    # of views that line the picture up nearly alike, the one through which its changes line up
-    # best over the whole clip (the wheel tilted 38 degrees scored 0.48 against 0.47 face on, but
-    # its changes lined up at 0.38 against 0.65, and it read -16% against +0.6%)
-    taken = max(readings, key=lambda angle: angle.score)
-    # the interval holds the readings of the views through which the changes also line up nearly
-    # as well: a view that lines the picture up alike but its changes clearly worse is a wrong one
-    # (the record's 0.6 turn: a view tilted 63 degrees through a 280-px lens scored 0.50 against
-    # 0.63, its changes 0.55 against 0.87, and read +27% against +0.7%)
-    readings = [angle for angle in readings if angle.score >= NEARLY_AS_WELL * taken.score]
-    low = min(angle.omega_low_rad_s for angle in readings)
-    high = max(angle.omega_high_rad_s for angle in readings)
-    return replace(taken, omega_low_rad_s=low, omega_high_rad_s=high, view=taken.view.scaled(1.0 / scale))
+        readings = [angle for angle in (next((angle for angle in rest if angle is not None), None),) if angle]
+    return readings
 
 
 def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
@@ -259,7 +282,9 @@ def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
     if not math.isfinite(rate):
         return None
     spread = _view_spread(changes, view, times, angles)
-    half = 1.96 * scatter + spread
+    # at least what reading the shifts to a tenth of the unrolled picture's step allows over the
+    # turn seen (a rendered fan's 1.9 turns: -0.0018% within +-0.0017%, missing by a hair)
+    half = max(1.96 * scatter + spread, READ_TO_DEG * abs(rate) / turned)
     if not half < LOOSEST * abs(rate):
         return None  # a rate the picture does not hold to within half itself tells nothing
     omega = math.radians(abs(rate))
