@@ -219,18 +219,17 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
     pairs = [(change.first, change.second) for change in changes]
     step_px = 0.04 * pairs[0][0].shape[1]
 
-    def readings_at(shares: tuple[float, ...]) -> list[PictureAngle]:
-        return _readings(changes, fitted_views(pairs, start.scaled(scale), step_px=step_px, search_tilt=search_tilt,
-                                               search_centre=search_centre, lag_shares=shares))
-
-    readings = readings_at(LAG_SHARES[0])
+    readings = _readings(changes, fitted_views(pairs, start.scaled(scale), step_px=step_px, search_tilt=search_tilt,
+                                               search_centre=search_centre, lag_shares=LAG_SHARES[0]))
     if not readings:
         return None
-    turned = max(angle.turned_deg for angle in readings)
-    if NEARER_LAGS_DEG[0] <= turned <= NEARER_LAGS_DEG[1]:
+    best = max(readings, key=lambda angle: angle.score)
+    if NEARER_LAGS_DEG[0] <= best.turned_deg <= NEARER_LAGS_DEG[1]:
         # about a turn: half the clip apart, the changes compare opposite sides of the body; the
-        # view is sought again through nearer ones too (a second search: only where it can matter)
-        readings += readings_at(LAG_SHARES[1])
+        # view is refined again from the best through nearer ones (only where it can matter)
+        again = fitted_views(pairs, best.view, step_px=step_px, search_tilt=False, search_centre=False,
+                             lag_shares=LAG_SHARES[1])
+        readings += [angle for angle in (_through(changes, again[0].view),) if angle is not None]
     # of views that line the picture up nearly alike, the one through which its changes line up
     # best over the whole clip (the wheel tilted 38 degrees scored 0.48 against 0.47 face on, but
     # its changes lined up at 0.38 against 0.65, and it read -16% against +0.6%)
