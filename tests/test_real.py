@@ -126,8 +126,7 @@ def test_bicycle_wheel_seen_face_on() -> None:
 def test_the_wheel_after_its_calibration_still() -> None:
     """The clip opens on a still calibration frame (a ruler held across the wheel) and cuts to
     the turning: the first 5 s read 0.038 rad/s, weak, with an interval that missed 2.27. Held to
-    its sticker's rate over those seconds (it slows 2% over the clip, and turns faster at first):
-    its picture comes back once, and its own turning gives the rate (-0.08% within +-0.08%)."""
+    its sticker's rate over those seconds (it slows 2% over the clip, and turns faster at first)."""
     clip = VIDEOS / "bicycle_wheel_frontal.mp4"
     need(clip, "the bicycle wheel video")
     truth = _wheel_truth(0.0, 5.0)

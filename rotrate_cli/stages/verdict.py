@@ -332,6 +332,13 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                    told.told_by if confirmed else "")
 
 
+#: A return seen once whose interval is narrower than this (half, of its rate) is not set against
+#: the picture's angle, which takes seconds to measure: the angle read real clips of about a turn
+#: to +-0.6-1.3% at best (the wheel, the record), and the EPFL cars' single turns, whose returns
+#: hold +-0.6-1%, took 2-4 times as long for it with their results unchanged.
+LOOSE_RETURN = 0.02
+
+
 def _closer_by_angle(period: Period, omega: float, low: float, high: float,
                      angle: PictureAngle | Callable[[], PictureAngle | None] | None) -> PictureAngle | None:
     """The picture's own turning angle where it rates a clip that comes back only once more
@@ -342,6 +349,8 @@ def _closer_by_angle(period: Period, omega: float, low: float, high: float,
     share those end pairs, so the closer one is reported rather than a mean of the two."""
     if period.frames >= 2 * period.lag_frames or angle is None:
         return None  # the clip holds a second return (or could): the return is the closer measure
+    if _half_width(omega, low, high) <= LOOSE_RETURN and callable(angle):
+        return None  # close enough: the angle (seconds to measure) would seldom be closer
     measured = angle() if callable(angle) else angle
     if measured is None or measured.alike_deg is not None:
         return None
