@@ -221,6 +221,7 @@ def test_under_a_turn_of_the_record_the_pictures_turning_gives_the_rate() -> Non
     assert not [w for w in analysis.warnings if "the tracks turn about an axis through" in w]
 
 
+@pytest.mark.slow  # 10-14 s: in make test-slow (the same 1.5 s about the truth's point stays, above)
 def test_the_record_s_tracks_in_two_groups_are_told_and_held() -> None:
     """The record's first 1.5 s, less than a turn (the repetition cannot give the rate), the axis
     found: the grooves' highlights read about 0.6 rad/s, the label's few tracks about 4, nothing
@@ -322,7 +323,9 @@ def test_the_record_turns_clockwise_seen_from_above() -> None:
     assert analysis.direction == "cw" and analysis.direction_in_picture
 
 
-@pytest.mark.parametrize("size", [pytest.param(0.5, marks=pytest.mark.slow), 0.25])  # half size: make test-slow
+# 10-14 s each: make test-slow (the wheel's parts and its rolled copy stay in make test)
+@pytest.mark.slow
+@pytest.mark.parametrize("size", [0.5, 0.25])
 def test_the_wheel_filmed_small_is_measured(tmp_path: Path, size: float) -> None:
     """At 256x192 "no point could be tracked": the tracker's window (21 px long) seeds only where
     it lies wholly on moving pixels, and the wheel's thin spokes left 24 corners in the whole
