@@ -168,3 +168,19 @@ def test_a_smooth_turn_of_points_in_one_patch_is_not_taken_for_a_rolling_camera(
     patch of the picture, not all over it."""
     tracks, frames = _cylinder_top()
     assert find_shake(tracks, frames, size_px=(1280, 720)) is None
+
+
+def test_a_still_background_is_told_from_none() -> None:
+    """A still background vouches for a still camera; where every long track moves (a record that
+    fills the picture), nothing tells a camera's turn from the body's, and the report says it
+    assumes a still camera (:data:`rotrate_cli.stages.tracks.NO_BACKGROUND_NOTE`)."""
+    from rotrate_cli.tracking.steady import MIN_BACKGROUND, still_background
+
+    frames = 120
+    none = np.zeros((frames, 2)), np.zeros(frames)
+    with_background, _ = _tracks(frames, *none, background=MIN_BACKGROUND, body=40)
+    only_body, _ = _tracks(frames, *none, background=0, body=40)
+    few_still, _ = _tracks(frames, *none, background=MIN_BACKGROUND - 1, body=40)
+    assert still_background(with_background, frames)
+    assert not still_background(only_body, frames)
+    assert not still_background(few_still, frames)

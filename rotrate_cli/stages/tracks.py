@@ -38,7 +38,7 @@ from rotrate_cli.tracking.klt import (
     tracking_scale,
 )
 from rotrate_cli.tracking.matched import match_frames
-from rotrate_cli.tracking.steady import CameraPath, Shake, find_shake
+from rotrate_cli.tracking.steady import CameraPath, Shake, find_shake, still_background
 from rotrate_cli.video.decode import FrameSource, prefetch
 from rotrate_cli.video.frames import Frame, VideoInfo
 from rotrate_cli.video.shots import longest_shot
@@ -183,6 +183,11 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     keyframes.camera = camera
     if shake is not None:
         notes.append(_shake_note(shake))
+    elif (not config.points_px and not still_background(tracks, run.frames, 1.0 / scale)
+          and _rim_moves(thumbnails)):
+        # all the picture moves, its rim too, and nothing in it stays still: a camera that turned
+        # would look the same (the record close-up rolled 3 degrees a second read -49%)
+        notes.append(NO_BACKGROUND_NOTE)
     if config.start_s == 0 and config.end_s is None:
         short = video.shortfall(run.frames, run.last_time_s)
         if short is not None:
@@ -191,6 +196,9 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
                    float(angle), tuple(notes), shake, camera, matched_tracks(config, info))
 
 
+#: Said where nothing in the picture stays still to tell the camera's own motion.
+NO_BACKGROUND_NOTE = ("no still background is seen to tell the camera's own motion: the result assumes a "
+                      "still camera (one that turns turns the whole picture with it)")
 #: A camera's own turn over the clip is named where it reaches this many degrees.
 MATERIAL_ROLL_DEG = 1.0
 

@@ -160,6 +160,23 @@ def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0,
                        rate, smooth)
 
 
+def still_background(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0) -> bool:
+    """True where at least :data:`MIN_BACKGROUND` long tracks stay still (within :data:`STILL_PX`
+    rms of their mean): a background that vouches for a still camera. Where none is seen, a camera
+    that turns or moves cannot be told from the body (``tracks`` as for :func:`find_shake`)."""
+    if tracks.empty:
+        return False
+    track = tracks["track"].to_numpy()
+    counts = np.bincount(track)
+    long_ids = np.flatnonzero(counts >= max(MIN_FRAMES, LONG_FRACTION * frames))
+    if len(long_ids) < MIN_BACKGROUND:
+        return False
+    rows = np.isin(track, long_ids)
+    spread = _spread(track[rows], tracks["x_px"].to_numpy(dtype=np.float64)[rows],
+                     tracks["y_px"].to_numpy(dtype=np.float64)[rows])
+    return int((spread <= STILL_PX * pixel_px).sum()) >= MIN_BACKGROUND
+
+
 def _camera_s(tracks: pd.DataFrame, path: CameraPath, still_ids: np.ndarray, size_px: tuple[int, int] | None,
               pixel_px: float) -> bool:
     """True where a smooth ``path`` is the camera's (see the module's notes): the still tracks
