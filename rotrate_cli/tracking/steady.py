@@ -104,8 +104,7 @@ def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0,
         return None
     track = tracks["track"].to_numpy()
     frame = tracks["frame"].to_numpy()
-    counts = np.bincount(track)
-    long_ids = np.flatnonzero(counts >= max(MIN_FRAMES, LONG_FRACTION * frames))
+    long_ids = _long_ids(track, frames)
     if len(long_ids) < MIN_BACKGROUND:
         return None
     rows = np.isin(track, long_ids)
@@ -167,14 +166,18 @@ def still_background(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0) -
     if tracks.empty:
         return False
     track = tracks["track"].to_numpy()
-    counts = np.bincount(track)
-    long_ids = np.flatnonzero(counts >= max(MIN_FRAMES, LONG_FRACTION * frames))
+    long_ids = _long_ids(track, frames)
     if len(long_ids) < MIN_BACKGROUND:
         return False
     rows = np.isin(track, long_ids)
     spread = _spread(track[rows], tracks["x_px"].to_numpy(dtype=np.float64)[rows],
                      tracks["y_px"].to_numpy(dtype=np.float64)[rows])
     return int((spread <= STILL_PX * pixel_px).sum()) >= MIN_BACKGROUND
+
+
+def _long_ids(track: np.ndarray, frames: int) -> np.ndarray:
+    """The tracks long enough to tell a still point from a slow one (see :data:`LONG_FRACTION`)."""
+    return np.flatnonzero(np.bincount(track) >= max(MIN_FRAMES, LONG_FRACTION * frames))
 
 
 def _camera_s(tracks: pd.DataFrame, path: CameraPath, still_ids: np.ndarray, size_px: tuple[int, int] | None,
