@@ -226,9 +226,9 @@ def test_the_record_s_tracks_in_two_groups_are_told_and_held() -> None:
     """The record's first 1.5 s, less than a turn (the repetition cannot give the rate), the axis
     found: the grooves' highlights read about 0.6 rad/s, the label's few tracks about 4, nothing
     between. A warning names the two groups, and they do not give the rate: the picture's own
-    turning does, its interval holding the truth, 3.55 (+3.6% within [-0.4%, +7.5%], good; the
-    interval held a view through which the changes lined up at 0.44 against 0.72, reading +35%,
-    and was weak before)."""
+    turning does, its interval holding the truth, 3.55 (-0.2% within [-1.8%, +7.5%], weak: two
+    views hold; a view through which the changes lined up at 0.44 against 0.72, reading +35%, is
+    no longer one of them)."""
     clip = VIDEOS / "record_oblique_closeup.mp4"
     need(clip, "the record video")
     truth = json.loads(clip.with_suffix(".truth.json").read_text())
