@@ -180,7 +180,8 @@ def analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallba
     """Measure the rotation rate of the object in a video or image sequence.
 
     ``progress(frames_done, frames_expected)`` is called as frames are tracked; ``stage(text)``
-    when the run moves on from tracking to the fits (which take a while on long clips).
+    as the run moves on to each later stage (the axis, the fits, their checks, the verdict: each
+    can take a while on a long clip).
 
     Raises:
         InputError: bad source or options.
@@ -212,6 +213,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         # no point followed (a blurred disc, thin spokes): the picture's own turning may still tell
         if config.method != "fit" or config.points_px or config.segment:
             raise
+        if stage is not None:
+            stage("measuring the picture's turning")
         try:
             return _repetition_only(error.footage, None, config, None, None)
         except NoResultError:
@@ -222,7 +225,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         # first 9, 14 and 18 photographs read -0.7%, -1.1% and -0.4% from 6, within 1% from 5
         config = replace(config, rejection=replace(config.rejection, min_samples=MATCHED_MIN_SAMPLES))
     if stage is not None:
-        stage("fitting the tracks")
+        stage("placing the axis and the lens")
     if config.window_s is not None and config.window_s > footage.duration_s:
         raise InputError(f"`window_s={config.window_s:g}` s is longer than the {footage.duration_s:.2f} s analysed; "
                          "give a window shorter than the clip (a few seconds, about a quarter turn or more)")
@@ -253,12 +256,16 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         footage = replace(footage, tracks=tracks.iloc[:0])
         del tracks  # the offsets hold what is needed: a long clip's positions need not stay
         release_free_memory()
+        if stage is not None:
+            stage("fitting the tracks")
         geometry, result = measure(body, geometry, config, size_px, steady=lambda: repetition.result() is not None)
         period = repetition.result()
     del body
     result = replace(result, features=name_rejections(result.features, places, geometry.fixation_px,
                                                       geometry.axis_angle_deg, result.combined.omega_rad_s,
                                                       result.offsets))
+    if stage is not None:
+        stage("checking the rate")
     checked = check_rate(result, geometry, config, size_px, view_tracks, repeating=period is not None,
                          clock_resolution_s=footage.info.clock_resolution_s, fps=footage.info.fps)
     if checked.result.combined.tracks_used == 0 and (period is not None or config.method == "fit"):
@@ -269,6 +276,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         series = rate_series(checked.result.offsets, config.window_s,
                              running_measure(config.method, config.rejection,
                                              with_sense(geometry.camera(size_px), decided_sense(checked.result))))
+    if stage is not None:
+        stage("weighing the tracks, the return and the picture's turning")
     try:
         return _result(footage, config, geometry, checked, period, view_tracks, series=series, tracks=kept)
     finally:
@@ -359,9 +368,10 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         direction, in_picture = sense_of_turning(direction, geometry.view, view_tracks, geometry.fixation_px,
                                                  verdict.omega_rad_s)
     checks = checked.notes
-    if verdict.rate_from == "turning" and checks:  # the tracks' own checks are of a rate not reported
+    if verdict.rate_from == "turning" and (checks or checked.doubts):
+        # the tracks' own checks and doubts are of a rate not reported
         checks = (f"the tracks' own rate ({combined.omega_rad_s:.4g} rad/s) is not the one reported; "
-                  f"{len(checks)} check(s) of it are left out",)
+                  f"{len(checks) + len(checked.doubts)} check(s) of it are left out",)
     warnings = footage.warnings + geometry.notes + notes + checks + verdict.notes
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)

@@ -107,3 +107,20 @@ def test_a_first_step_that_fits_two_ways_is_weak_with_both_readings() -> None:
     verdict = judge(None, None, 0, angle=angle)
     assert verdict.quality == "weak"
     assert verdict.omega_high_rad_s >= 3.0 and verdict.omega_low_rad_s <= 3.0 * 25 / 35
+
+
+def test_a_view_whose_changes_line_up_worse_change_by_change_is_told_apart() -> None:
+    """Two views' chains over the same changes: one whose peaks fall short of the other's in
+    nearly every change, by more than chance allows, is clearly worse; one that falls short on
+    average but as often exceeds it (their scatter) is not; nor are too few changes shared."""
+    from rotrate_cli.scene.picture_angle import _clearly_short_of
+
+    rng = np.random.default_rng(5)
+    times = np.arange(31) / FPS
+    best = 0.8 + 0.05 * rng.standard_normal(30)
+    shortfall = 0.1 + 0.05 * rng.standard_normal(30)  # the record's 0.9 turn from 5 s: -0.11 +- 0.02
+    assert _clearly_short_of(times, best - shortfall, times, best)
+    assert not _clearly_short_of(times, best, times, best - shortfall)  # the better one is not short
+    scattered = best - 0.01 + 0.15 * rng.standard_normal(30)
+    assert not _clearly_short_of(times, scattered, times, best)
+    assert not _clearly_short_of(times[:5], (best - shortfall)[:4], times, best)  # too few shared

@@ -165,6 +165,37 @@ def test_the_wheel_under_a_turn_is_read_from_the_pictures_turning() -> None:
     assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
 
 
+def test_a_third_of_the_wheels_turn_through_an_uncertain_view_is_not_called_good_when_off() -> None:
+    """Its 1.2-2.03 s (0.3 of a turn): the view found sits 2.5 px (reduced) left of the hub, and
+    its changes line up no worse 1.3 px right, where the rate is 2% lower. It read +5.5% within
+    +-2.5%, good. The view is now varied as far as its changes do not line up clearly worse
+    (issue 49): the interval holds the sticker's rate, and a result that far off is weak."""
+    clip = VIDEOS / "bicycle_wheel_frontal.mp4"
+    need(clip, "the bicycle wheel video")
+    truth = _wheel_truth(1.2, 2.03)
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None, start_s=1.2, end_s=2.03))
+    assert analysis.rate_from == "turning"
+    assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
+    assert analysis.quality == "weak" or analysis.omega_rad_s == pytest.approx(truth, rel=0.03)
+
+
+@pytest.mark.slow  # about 13 s: in make test-slow (the wheel's parts stay in make test)
+def test_a_view_whose_changes_line_up_clearly_worse_leaves_the_interval() -> None:
+    """The record's 0.9 turn from 5 s, the axis found: a view 28 px off the spindle scored 0.76
+    against the best's 0.87, nearly as well, and its +6.3% widened the interval past +-5%: weak,
+    though the best read +1.4%. Change by change its changes fell short in 32 of 36 (by 0.11 +-
+    0.03): it is no longer held (issue 49), and the result is good and within 2%."""
+    clip = VIDEOS / "record_oblique_closeup.mp4"
+    need(clip, "the record video")
+    truth = json.loads(clip.with_suffix(".truth.json").read_text())["omega"]
+    end = 5.0 + 0.9 * 2 * math.pi / truth
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None, start_s=5.0, end_s=end))
+    assert analysis.rate_from == "turning"
+    assert analysis.quality == "good"
+    assert analysis.omega_rad_s == pytest.approx(truth, rel=0.02)
+    assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
+
+
 def test_a_few_tracks_that_disagree_give_way_to_the_pictures_turning() -> None:
     """Its 3-7 s about the truth's fixation: three tracks at 0.76, 1.08 and 2.80 rad/s, whose
     joint fit read 0.94, weak. Under two turns of a wheel seen face on, the picture tells the rate
@@ -225,10 +256,11 @@ def test_under_a_turn_of_the_record_the_pictures_turning_gives_the_rate() -> Non
 def test_the_record_s_tracks_in_two_groups_are_told_and_held() -> None:
     """The record's first 1.5 s, less than a turn (the repetition cannot give the rate), the axis
     found: the grooves' highlights read about 0.6 rad/s, the label's few tracks about 4, nothing
-    between. A warning names the two groups, and they do not give the rate: the picture's own
-    turning does, its interval holding the truth, 3.55 (-0.2% within [-1.8%, +7.5%], weak: two
-    views hold; a view through which the changes lined up at 0.44 against 0.72, reading +35%, is
-    no longer one of them)."""
+    between. They do not give the rate: the picture's own turning does, its interval holding the
+    truth, 3.55 (-0.2% within [-1.8%, +7.5%], weak: two views hold; a view through which the
+    changes lined up at 0.44 against 0.72, reading +35%, is no longer one of them). The groups are
+    a doubt of the tracks' rate, not the one reported: a line says the tracks' checks are left out
+    (the groups' warning said the interval held both, and it did not)."""
     clip = VIDEOS / "record_oblique_closeup.mp4"
     need(clip, "the record video")
     truth = json.loads(clip.with_suffix(".truth.json").read_text())
@@ -236,7 +268,8 @@ def test_the_record_s_tracks_in_two_groups_are_told_and_held() -> None:
     assert analysis.rate_from == "turning"
     assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
     assert analysis.quality == "weak" or analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.05)
-    assert [w for w in analysis.warnings if "fall into two groups" in w]
+    assert not [w for w in analysis.warnings if "fall into two groups" in w]
+    assert [w for w in analysis.warnings if "the tracks' own rate" in w and "left out" in w]
 
 
 def test_real_cases_are_never_confidently_wrong() -> None:

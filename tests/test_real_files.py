@@ -208,7 +208,31 @@ def test_fps_that_contradicts_a_variable_rate_stream_is_warned_of(files: dict[st
 
 
 def test_the_fits_are_announced_after_the_frames() -> None:
+    """Each stage after the frames is told as it starts (issue 50: the fits, their checks and the
+    verdict had run under the tracking's full bar, its clock stopped)."""
     calls: list[object] = []
     analyze(BOX, AnalysisConfig(fixation_px=(319.5, 179.5), end_s=2.0),
             progress=lambda done, total: calls.append(done), stage=calls.append)
-    assert calls[-1] == "fitting the tracks" and calls[-2] == 61
+    stages = [call for call in calls if isinstance(call, str)]
+    assert calls[calls.index(stages[0]) - 1] == 61  # after the last frame
+    assert stages == ["placing the axis and the lens", "fitting the tracks", "checking the rate",
+                      "weighing the tracks, the return and the picture's turning"]
+
+
+def test_a_stage_after_the_frames_starts_its_own_clock() -> None:
+    """The command line's bar: once the frames' bar is full, the next stage's clock runs again."""
+    import time
+
+    from rich.progress import Progress
+
+    from rotrate_cli.cli import next_stage
+
+    with Progress(disable=True) as progress:
+        task = progress.add_task("frames", total=None)
+        progress.update(task, completed=61, total=61)
+        assert progress.tasks[0].finished  # rich stops a full bar's clock
+        next_stage(progress, task, "fitting the tracks")
+        time.sleep(0.02)
+        shown = progress.tasks[0]
+        assert not shown.finished and shown.description == "fitting the tracks"
+        assert shown.elapsed is not None and shown.elapsed >= 0.02

@@ -30,6 +30,8 @@ from rotrate_cli.output.files import write_text
 from rotrate_cli.runtime.choices import FORMATS, METHODS
 
 if TYPE_CHECKING:
+    from rich.progress import Progress, TaskID
+
     from rotrate_cli.analysis import Analysis
     from rotrate_cli.batch import Outcome
 
@@ -231,10 +233,38 @@ def progress_bar(quiet: bool) -> Iterator[tuple[Callable[[int, int | None], None
         def update(done: int, total: int | None) -> None:
             progress.update(task, completed=done, total=total)
 
-        def stage(text: str) -> None:  # the bar pulses: the fits' length is not known ahead
-            progress.update(task, description=text, total=None)
+        yield update, lambda text: next_stage(progress, task, text)
 
-        yield update, stage
+
+def next_stage(progress: Progress, task: TaskID, text: str) -> None:
+    """The bar moved on to a stage after the frames: it pulses (a stage's length is not known
+    ahead) and its clock starts again (once the frames' bar was full, rich kept its time: the fits
+    that followed showed a stopped clock)."""
+    progress.reset(task, total=None, description=text)
+
+
+def batch_line(quiet: bool, total: int, done_before: int = 0) -> Callable[[Outcome], None]:
+    """A batch's ``done`` callback: one line on stderr as each input finishes (inputs done of
+    ``total``, the input, its rate and quality or its failure, the time since the batch started);
+    nothing when ``quiet``."""
+    import time
+
+    started, count = time.monotonic(), [done_before]
+    console = Console(stderr=True, highlight=False, soft_wrap=True)
+
+    def line(outcome: Outcome) -> None:
+        count[0] += 1
+        if quiet:
+            return
+        if outcome.analysis is not None:
+            told = (f"{outcome.analysis.omega_rad_s:.4g} rad/s, {outcome.analysis.quality}"
+                    + ("" if outcome.status == "ok" else f" ({outcome.status})"))
+        else:
+            told = f"{outcome.status}: {in_flags(outcome.error)}"
+        console.print(f"rotrate: [{count[0]}/{total}] {outcome.source}: {told} ({time.monotonic() - started:.0f} s)",
+                      markup=False)
+
+    return line
 
 
 def wide_console() -> Console:

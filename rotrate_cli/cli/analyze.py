@@ -24,11 +24,11 @@ from rotrate_cli.cli import (
     QuietOption,
     SchedulerOption,
     app,
+    batch_line,
     check_format,
     check_method,
     emit,
     fail,
-    in_flags,
     numbers,
     progress_bar,
     run,
@@ -370,8 +370,6 @@ def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tol
     """Analyse several inputs; one summary row each; the worst input's exit code. Each input's
     report is written as soon as it finishes, with a progress line (unless ``quiet``); with
     ``resume``, the inputs whose reports are there already are skipped."""
-    import time
-
     from rotrate_cli.batch import Job, Outcome, batch_exit_code, run_batch
     from rotrate_cli.cli.report import render, render_summary, summary_text
 
@@ -389,23 +387,14 @@ def _batch(sources: list[str], config: AnalysisConfig, expect: float | None, tol
             check_output_path(path, force)  # before a long run, not after
             details[source] = path
     todo = [source for source in sources if source not in skipped]
-    started, count = time.monotonic(), [len(skipped)]
-    console = Console(stderr=True, highlight=False, soft_wrap=True)
+    line = batch_line(quiet, len(sources), len(skipped))
 
     def done(outcome: Outcome) -> None:
         """Keep a finished input's report at once (an interrupt later loses nothing) and say so."""
-        count[0] += 1
         if outcome.analysis is not None and outcome.source in details:
             write_text(details[outcome.source], render(said(outcome.analysis), "csv" if fmt == "csv" else "json"),
                        force)
-        if not quiet:
-            if outcome.analysis is not None:
-                said_line = (f"{outcome.analysis.omega_rad_s:.4g} rad/s, {outcome.analysis.quality}"
-                             + ("" if outcome.status == "ok" else f" ({outcome.status})"))
-            else:
-                said_line = f"{outcome.status}: {in_flags(outcome.error)}"
-            console.print(f"rotrate: [{count[0]}/{len(sources)}] {outcome.source}: {said_line} "
-                          f"({time.monotonic() - started:.0f} s)", markup=False)
+        line(outcome)
 
     ran = said_outcomes(run_batch([Job(source, config, expect, tolerance, strict) for source in todo], jobs,
                                   done=done, scheduler=scheduler))

@@ -18,8 +18,10 @@ from rotrate_cli.cli import (
     FormatOption,
     MethodOption,
     OutputOption,
+    QuietOption,
     SchedulerOption,
     app,
+    batch_line,
     check_format,
     check_method,
     emit,
@@ -47,9 +49,11 @@ def check_command(
     fmt: Annotated[str | None, typer.Option("--format", "-f", metavar="FORMAT",
                                             help="table (pass/fail), csv or json (one row per file).")] = None,
     force: Annotated[bool, typer.Option("--force", metavar="", help="Replace an existing --junit file.")] = False,
+    quiet: QuietOption = False,
     debug: DebugOption = False,
 ) -> None:
-    """Run a regression manifest: pass when every file's omega is within its tolerance."""
+    """Run a regression manifest: pass when every file's omega is within its tolerance. A line on
+    stderr tells each file as it finishes."""
 
     def job() -> int:
         from rotrate_cli.analysis import AnalysisConfig
@@ -61,7 +65,8 @@ def check_command(
         if junit is not None:
             check_output_path(junit, force)
         jobs_list = read_manifest(manifest, AnalysisConfig(fixation_px=None))
-        outcomes = said_outcomes(run_batch(jobs_list, jobs, scheduler=scheduler))
+        outcomes = said_outcomes(run_batch(jobs_list, jobs, done=batch_line(quiet, len(jobs_list)),
+                                           scheduler=scheduler))
         expected = [(j.expected_rad_s or math.nan, j.tolerance_pct or 0.0) for j in jobs_list]
         if junit is not None:
             write_text(junit, junit_xml(outcomes, expected, manifest.stem), force)

@@ -454,7 +454,7 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
     weak: list[str] = []
     notes = [f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, measured through "
              f"the plane's view (tilted {angle.view.tilt_deg:.0f} degrees)"]
-    notes.extend(doubts)
+    # the ``doubts`` are of the tracks' rate: told only where it is the one reported
     if angle.alike_deg is not None and angle.first_step_deg != 0:
         other = omega * abs(angle.alike_deg / angle.first_step_deg)
         weak.append(f"the picture's turning between frames fits {abs(angle.first_step_deg):.1f} and "
@@ -483,14 +483,14 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
             weak.append(f"the picture's turning ({omega:.4g} rad/s) disagrees with the tracks' rate "
                         f"({tracks.omega_rad_s:.4g} rad/s), which is reported; the 95% interval holds both")
             return Verdict(tracks.omega_rad_s, min(low, tracks.omega_low_rad_s), max(high, tracks.omega_high_rad_s),
-                           "tracks", 1, "weak", (*verdict.weak_because, *weak), tuple(notes[1:]))
+                           "tracks", 1, "weak", (*verdict.weak_because, *weak), (*verdict.notes, *notes[1:]))
         if told and not agrees:
             # the tracks' rate is reported (their model is the paper's, and they agree among
             # themselves); the interval holds both
             weak.append(f"the picture's turning ({omega:.4g} rad/s) disagrees with the tracks' rate "
                         f"({tracks.omega_rad_s:.4g} rad/s), which is reported; the 95% interval holds both")
             low, high = min(low, tracks.omega_low_rad_s), max(high, tracks.omega_high_rad_s)
-            return Verdict(tracks.omega_rad_s, low, high, "tracks", 1, "weak", tuple(weak), tuple(notes[1:]))
+            return Verdict(tracks.omega_rad_s, low, high, "tracks", 1, "weak", tuple(weak), (*doubts, *notes[1:]))
         elif not agrees:
             notes.append(f"the tracks read {tracks.omega_rad_s:.4g} rad/s, loosely (points that slide along "
                          "grooves or rims, or stay on reflections): they do not stand behind the rate")
