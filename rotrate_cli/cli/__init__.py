@@ -20,7 +20,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, TypeVar
 
 import typer
-from rich.console import Console
 
 from rotrate_cli.errors import InputError, NoResultError, OutputError, RotrateError
 from rotrate_cli.output.files import write_text
@@ -30,6 +29,7 @@ from rotrate_cli.output.files import write_text
 from rotrate_cli.runtime.choices import FORMATS, METHODS
 
 if TYPE_CHECKING:
+    from rich.console import Console
     from rich.progress import Progress, TaskID
 
     from rotrate_cli.analysis import Analysis
@@ -100,6 +100,14 @@ _SETTING = re.compile(r"`([a-z_]+)(?:=([^`]*))?`")
 EXIT_CODES: tuple[tuple[type[RotrateError], int], ...] = ((NoResultError, 1), (InputError, 2), (OutputError, 2))
 
 
+def console(**options: object) -> Console:
+    """A rich console (rich is loaded here, when something is printed: not before the first frame
+    where nothing is, which it delayed by 0.03 s)."""
+    from rich.console import Console
+
+    return Console(**options)  # type: ignore[arg-type]
+
+
 def in_flags(text: str) -> str:
     """A library message as the command line says it: each `setting` (or `setting=value`) named
     by its flag (``--every 3``); backquoted names that are no setting stay as they are."""
@@ -132,7 +140,7 @@ def exit_code(error: RotrateError) -> int:
 
 
 def fail(message: str, code: int) -> typer.Exit:
-    Console(stderr=True, highlight=False, soft_wrap=True).print(f"rotrate: error: {in_flags(message)}", markup=False)
+    console(stderr=True, highlight=False, soft_wrap=True).print(f"rotrate: error: {in_flags(message)}", markup=False)
     return typer.Exit(code)
 
 
@@ -191,7 +199,7 @@ def emit(analysis: Analysis, fmt: str, output: Path | None, force: bool) -> None
         write_text(output, render(analysis, fmt), force)
         return
     if fmt == "table":
-        render_table(analysis, Console(highlight=False))
+        render_table(analysis, console(highlight=False))
     else:
         sys.stdout.write(render(analysis, fmt))
         sys.stdout.flush()
@@ -202,8 +210,11 @@ def progress_bar(quiet: bool) -> Iterator[tuple[Callable[[int, int | None], None
                                                  Callable[[str], None] | None]]:
     """The frames' progress callback and the stage callback of :func:`rotrate_cli.analysis.analyze`
     (None, None when quiet or not on a terminal)."""
-    console = Console(stderr=True)
-    if quiet or not console.is_terminal:
+    if quiet or not (sys.stderr.isatty() or os.environ.get("FORCE_COLOR") or os.environ.get("TTY_COMPATIBLE") == "1"):
+        yield None, None  # (decided before rich is loaded: a batch or a pipe needs none of it)
+        return
+    stderr = console(stderr=True)
+    if not stderr.is_terminal:
         yield None, None
         return
     from rich.progress import (
@@ -227,7 +238,7 @@ def progress_bar(quiet: bool) -> Iterator[tuple[Callable[[int, int | None], None
 
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), RateColumn(),
                TimeElapsedColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=console, transient=True) as progress:
+    with Progress(*columns, console=stderr, transient=True) as progress:
         task = progress.add_task("frames", total=None)
 
         def update(done: int, total: int | None) -> None:
@@ -250,7 +261,7 @@ def batch_line(quiet: bool, total: int, done_before: int = 0) -> Callable[[Outco
     import time
 
     started, count = time.monotonic(), [done_before]
-    console = Console(stderr=True, highlight=False, soft_wrap=True)
+    stderr = console(stderr=True, highlight=False, soft_wrap=True)
 
     def line(outcome: Outcome) -> None:
         count[0] += 1
@@ -261,7 +272,7 @@ def batch_line(quiet: bool, total: int, done_before: int = 0) -> Callable[[Outco
                     + ("" if outcome.status == "ok" else f" ({outcome.status})"))
         else:
             told = f"{outcome.status}: {in_flags(outcome.error)}"
-        console.print(f"rotrate: [{count[0]}/{total}] {outcome.source}: {told} ({time.monotonic() - started:.0f} s)",
+        stderr.print(f"rotrate: [{count[0]}/{total}] {outcome.source}: {told} ({time.monotonic() - started:.0f} s)",
                       markup=False)
 
     return line
@@ -269,8 +280,8 @@ def batch_line(quiet: bool, total: int, done_before: int = 0) -> Callable[[Outco
 
 def wide_console() -> Console:
     """stdout, at least 140 columns wide when it is not a terminal (file names stay whole in logs)."""
-    console = Console(highlight=False)
-    return console if console.is_terminal else Console(highlight=False, width=max(console.width, 140))
+    stdout = console(highlight=False)
+    return stdout if stdout.is_terminal else console(highlight=False, width=max(stdout.width, 140))
 
 
 def _quiet_native_logs() -> None:
@@ -319,7 +330,7 @@ def main() -> None:
     except ClickException as error:
         context = getattr(error, "ctx", None)
         where = f"rotrate {context.info_name} --help" if context is not None and context.parent else "rotrate --help"
-        Console(stderr=True, highlight=False, soft_wrap=True).print(
+        console(stderr=True, highlight=False, soft_wrap=True).print(
             f"rotrate: error: {error.format_message()} (see {where})", markup=False)
         sys.exit(error.exit_code)
     except typer.Abort:

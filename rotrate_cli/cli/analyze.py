@@ -11,7 +11,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.console import Console
 
 from rotrate_cli.cli import (
     OVERLAY_SUFFIXES,
@@ -27,6 +26,7 @@ from rotrate_cli.cli import (
     batch_line,
     check_format,
     check_method,
+    console,
     emit,
     fail,
     numbers,
@@ -296,7 +296,7 @@ def _one(source: str, config: AnalysisConfig, outputs: _Outputs, form: str, unit
         write_plot(shown, outputs.plot, outputs.force)
     emit(shown, form, outputs.report, outputs.force)
     for warning in analysis.warnings:
-        Console(stderr=True, soft_wrap=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
+        console(stderr=True, soft_wrap=True).print(f"rotrate: warning: {warning}", markup=False, highlight=False)
     if expect is not None and tolerance is not None:
         miss = check_expected(analysis.omega_rad_s, expect, tolerance)
         if miss:

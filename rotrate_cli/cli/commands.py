@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
 
 from rotrate_cli.cli import (
     DebugOption,
@@ -24,6 +23,7 @@ from rotrate_cli.cli import (
     batch_line,
     check_format,
     check_method,
+    console,
     emit,
     fail,
     in_flags,
@@ -129,7 +129,7 @@ def frame_command(
             message = (f"axis found through {x:.1f},{y:.1f} ({analysis.axis_angle_deg:+.1f} deg from vertical; "
                        f"omega {analysis.omega_rad_s:.4f} rad/s): try --fixation {x:.1f},{y:.1f}{hint}")
         write_image(output, image, force)
-        Console(highlight=False, soft_wrap=True).print(f"wrote {output} (frame {frame.index}, {frame.time_s:.3f} s); "
+        console(highlight=False, soft_wrap=True).print(f"wrote {output} (frame {frame.index}, {frame.time_s:.3f} s); "
                                                        f"{message}", markup=False)
         return 0
 
@@ -217,7 +217,7 @@ def synth_command(
                             seed=seed)
         truth = write_clip(scene, output, force=force)
         fx, fy = truth["fixation_px"]  # type: ignore[misc]
-        Console(highlight=False).print(
+        console(highlight=False).print(
             f"wrote {output} ({scene.frame_count} frames); truth: omega {abs(omega):g} rad/s, "
             f"fixation {fx:g},{fy:g}", markup=False)
         return 0
