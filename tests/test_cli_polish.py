@@ -77,6 +77,9 @@ def test_help_says_what_each_command_has() -> None:
     assert "<str>" not in analyze and "<float>" not in analyze
     flags = [line for line in analyze.splitlines() if "--force" in line or "--strict" in line]
     assert flags and not any("<bool>" in line for line in flags)
+    for command in ([], ["analyze"], ["check"], ["synth"], ["frame"], ["omega"]):  # --help is a flag too
+        shown = runner.invoke(app, [*command, "--help"]).stdout
+        assert "--help" in shown and "<bool>" not in shown, command
     version = runner.invoke(app, ["--version"])
     assert version.exit_code == 0 and version.stdout.startswith("rotrate ")
 

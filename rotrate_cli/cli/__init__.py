@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, TypeVar
 
 import typer
+from typer.core import TyperCommand, TyperGroup
 
 from rotrate_cli.errors import InputError, NoResultError, OutputError, RotrateError
 from rotrate_cli.output.files import write_text
@@ -35,7 +36,33 @@ if TYPE_CHECKING:
     from rotrate_cli.analysis import Analysis
     from rotrate_cli.batch import Outcome
 
-app = typer.Typer(
+class _HelpFlag:
+    """A command whose ``--help`` is shown as the flag it is (typer showed it as ``--help <bool>``)."""
+
+    def get_help_option(self, ctx: typer.Context):  # type: ignore[no-untyped-def]
+        option = super().get_help_option(ctx)  # type: ignore[misc]
+        if option is not None:
+            option.metavar = ""
+        return option
+
+
+class _Group(_HelpFlag, TyperGroup):
+    pass
+
+
+class _Command(_HelpFlag, TyperCommand):
+    pass
+
+
+class _Typer(typer.Typer):
+    """The app, its commands made as :class:`_Command`."""
+
+    def command(self, *args, cls=None, **kwargs):  # type: ignore[no-untyped-def]
+        return super().command(*args, cls=cls or _Command, **kwargs)
+
+
+app = _Typer(
+    cls=_Group,
     name="rotrate",
     help="Measure how fast a rigid object spins (rad/s) from a video, on a tripod or held by hand.",
     no_args_is_help=True,
