@@ -289,3 +289,17 @@ def test_a_sense_the_user_gave_is_fitted_and_checked_against_the_tracks() -> Non
     weak = _pinhole_tracks(np.random.default_rng(5), 80, 0.2)  # undecided (see above)
     camera = Camera(500.0, 0.0, 1.0, -1)
     assert told_sense_doubt(_fitted_through(weak, camera), camera, -1) is None
+
+
+def test_the_sense_the_tracks_told_is_read_one_way() -> None:
+    """The tracks' senses (NaN where a track's fit did not tell one) give the sense by their sum's
+    sign; evenly split, 0; none told, None. The joint fit, the axis's placing and the second looks
+    read it from the one function."""
+    from rotrate_cli.stages.fits import told_sense
+
+    nan = float("nan")
+    assert told_sense(np.array([1.0, 1.0, -1.0, nan])) == 1
+    assert told_sense(np.array([-1.0, nan, -1.0])) == -1
+    assert told_sense(np.array([1.0, -1.0])) == 0
+    assert told_sense(np.array([nan, nan])) is None
+    assert told_sense(np.array([])) is None

@@ -223,9 +223,9 @@ def _joint(
     typical = float(np.median(variance))
     noise_px = np.maximum(np.sqrt((dof * variance + PRIOR_DOF * typical) / (dof + PRIOR_DOF)),
                           max(rejection.residual_floor, 1e-9))
-    senses = used["sense"].to_numpy(dtype=float)
-    decided = bool(np.isfinite(senses).any())
-    sense = (float(np.sign(np.nansum(senses))) if decided else float(seen_sense)) or 1.0
+    told = told_sense(used["sense"].to_numpy(dtype=float))
+    decided = told is not None
+    sense = float(told if told is not None else seen_sense) or 1.0
     spread = (pooled.omega_high_rad_s - pooled.omega_low_rad_s) / pooled.omega_rad_s
     noise = dict(zip(used["track"], noise_px, strict=True))
     span = float(np.clip(2 * spread, 0.02, 0.5)) if math.isfinite(spread) else 0.2
@@ -274,12 +274,20 @@ def no_result_message(features: pd.DataFrame) -> str:
             "try a longer clip, `roi` around the object, or check `fixation_px`")
 
 
+def told_sense(senses: np.ndarray) -> int | None:
+    """The sense of rotation that tracks' fits through a lens told (their ``sense`` column, +1
+    anticlockwise, -1 clockwise, NaN where a track's did not; see
+    :func:`rotrate_cli.fitting.estimators.fit_tracks`): the sign of their sum, 0 where they are
+    evenly split; None where none told one. The one reading of it: the joint fit, the axis's
+    placing and the second looks (:func:`decided_sense`) all take it from here."""
+    told = senses[np.isfinite(senses)]
+    return int(np.sign(told.sum())) if len(told) else None
+
+
 def decided_sense(result: RateResult) -> int:
-    """The sense of rotation the inlier tracks' fits through a lens decided (+1 anticlockwise,
-    -1 clockwise; see :func:`rotrate_cli.fitting.estimators.fit_tracks`), 0 where they did not."""
-    senses = result.features.loc[result.features["inlier"], "sense"].to_numpy(dtype=float)
-    senses = senses[np.isfinite(senses)]
-    return int(np.sign(senses.sum())) if len(senses) else 0
+    """The sense of rotation the inlier tracks' fits through a lens decided (:func:`told_sense`),
+    0 where they did not or are evenly split."""
+    return told_sense(result.features.loc[result.features["inlier"], "sense"].to_numpy(dtype=float)) or 0
 
 
 def with_sense(camera: Camera | None, sense: int) -> Camera | None:

@@ -39,6 +39,7 @@ from rotrate_cli.stages.fits import (
     rates_from_offsets,
     rejoined,
     thin,
+    told_sense,
     with_sense,
 )
 from rotrate_cli.stages.tracks import MIN_TRACKS_FOR_ANGLE
@@ -453,9 +454,9 @@ def inliers_and_rate(result: RateResult, camera: Camera | None
     offsets = result.offsets[result.offsets["track"].isin(features.loc[inlier, "track"])]
     omega = result.combined.omega_rad_s
     if camera is not None:
-        senses = features.loc[inlier, "sense"].to_numpy(dtype=float)
-        if np.isfinite(senses).any():
-            omega *= float(np.sign(np.nansum(senses))) or 1.0
+        told = told_sense(features.loc[inlier, "sense"].to_numpy(dtype=float))
+        if told is not None:
+            omega *= float(told) or 1.0
         elif camera.sense:
             omega *= float(camera.sense)
         elif result.direction in SENSES:  # as the near side's travel shows it (see fits.rates_from_offsets)
