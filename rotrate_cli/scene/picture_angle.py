@@ -31,9 +31,9 @@ from rotrate_cli.scene.disc import (
     LAG_SHARES,
     Candidate,
     DiscView,
+    RingCorrelations,
     fitted_views,
     moving_weight,
-    ring_correlation,
     second_peak,
     shift_deg,
     unrolled,
@@ -194,6 +194,11 @@ class _Change:
     first: np.ndarray
     second: np.ndarray
 
+    @property
+    def difference(self) -> np.ndarray:
+        """``second`` less ``first`` (unrolled at once: the unrolling is linear)."""
+        return self.second - self.first
+
 
 def _changes(kept: list[tuple[int, float, np.ndarray]]) -> list[_Change]:
     found = []
@@ -300,7 +305,8 @@ def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
     """The angle and rate through ``view`` (the reduced frames' pixels); None where it tells none."""
     if view.tilt_deg > MOST_TILT_DEG or view.focal_px < SHORTEST_FOCAL * changes[0].first.shape[1]:
         return None  # a plane edge on (a side view: its picture does not turn), or no lens a camera has
-    chain = _chain(changes, view, ANGLES, RINGS)
+    unrolled_changes = _unrolled_changes(changes, view, ANGLES, RINGS)
+    chain = _chain(changes, *unrolled_changes)
     if chain is None:
         return None
     times, angles, scores, alike, first_step = chain
@@ -308,7 +314,8 @@ def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
     score = float(np.median(scores))
     if turned < MIN_TURNED_DEG or score < MIN_SCORE:
         return None
-    rate, scatter = _long_rate(changes, view, times, angles, ANGLES, RINGS)
+    rate, scatter = _rate_of(changes, *unrolled_changes, times, angles)
+    del unrolled_changes
     if not math.isfinite(rate):
         return None
     spread = _view_spread(changes, view, times, angles)
@@ -325,15 +332,15 @@ def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
 def _unrolled_changes(changes: list[_Change], view: DiscView, angles: int, rings: int) -> tuple[list[np.ndarray],
                                                                                                   np.ndarray]:
     maps = unrolled(changes[0].first.shape, view, angles, rings)
-    unrolled_changes = [maps.of(change.second) - maps.of(change.first) for change in changes]
+    unrolled_changes = [maps.of(change.difference) for change in changes]
     return unrolled_changes, moving_weight(unrolled_changes, maps.inside)
 
 
-def _chain(changes: list[_Change], view: DiscView, angles: int, rings: int) -> tuple[
+def _chain(changes: list[_Change], unrolled_changes: list[np.ndarray], weight: np.ndarray) -> tuple[
         np.ndarray, np.ndarray, np.ndarray, float | None, float] | None:
-    """The angle at each change, chained from nearby ones (the latest key change sharing no frame);
-    the peaks' heights; the first step's alternative shift (see :class:`PictureAngle`)."""
-    unrolled_changes, weight = _unrolled_changes(changes, view, angles, rings)
+    """The angle at each change (unrolled through a view), chained from nearby ones (the latest
+    key change sharing no frame); the peaks' heights; the first step's alternative shift (see
+    :class:`PictureAngle`)."""
     if weight.sum() < 50:
         return None
     # a change far larger than the typical one is no turn's (a still first frame, a flash, a
@@ -343,7 +350,8 @@ def _chain(changes: list[_Change], view: DiscView, angles: int, rings: int) -> t
     if len(ordinary) < MIN_CHANGES:
         return None
     start = int(ordinary[0])
-    rate, first_step, alike = _first_rate(changes, unrolled_changes, weight, ordinary)
+    correlate = RingCorrelations(unrolled_changes, weight)
+    rate, first_step, alike = _first_rate(changes, correlate, ordinary)
     measured: dict[int, float] = {start: 0.0}
     heights: dict[int, float] = {start: 1.0}
     keys = [start]
@@ -358,7 +366,7 @@ def _chain(changes: list[_Change], view: DiscView, angles: int, rings: int) -> t
             # falling from 0.6 to 0.15 as the shift from the key grew to 137 degrees)
             key = max(i for i in measured if _apart(changes[i], changes[k]))
             keys.append(key)
-        correlation = ring_correlation(unrolled_changes[key], unrolled_changes[k], weight)
+        correlation = correlate(key, int(k))
         predicted = rate * (changes[k].time_s - changes[key].time_s)
         shift, height = shift_deg(correlation, predicted, PREDICTED_WITHIN_DEG + PREDICTED_SHARE * abs(predicted))
         if len(heights) > 3 and height < WEAK_PEAK * float(np.median(list(heights.values())[1:])):
@@ -375,7 +383,7 @@ def _chain(changes: list[_Change], view: DiscView, angles: int, rings: int) -> t
             np.array([heights[i] for i in order[1:]]), alike, first_step)
 
 
-def _first_rate(changes: list[_Change], unrolled_changes: list[np.ndarray], weight: np.ndarray,
+def _first_rate(changes: list[_Change], correlate: RingCorrelations,
                 ordinary: np.ndarray) -> tuple[float, float, float | None]:
     """The rate to start the chain with (degrees a second): the median of the rates of up to
     :data:`FIRST_PAIRS` pairs of nearby changes over the clip, each its best shift anywhere
@@ -387,7 +395,7 @@ def _first_rate(changes: list[_Change], unrolled_changes: list[np.ndarray], weig
         if not later:
             continue
         k = int(later[0])
-        correlation = ring_correlation(unrolled_changes[int(i)], unrolled_changes[k], weight)
+        correlation = correlate(int(i), k)
         shift, height = shift_deg(correlation)
         apart = max(5.0, 0.5 * abs(shift))
         other_shift, other_height = second_peak(correlation, shift, apart)
@@ -408,34 +416,28 @@ def _recent_rate(points: list[tuple[float, float]]) -> float | None:
     return float(np.median(slopes)) if slopes else None
 
 
-def _long_rate(changes: list[_Change], view: DiscView, times: np.ndarray, angles_deg: np.ndarray, angles: int,
-               rings: int) -> tuple[float, float]:
-    """The rate (degrees a second, signed) fitted with an offset to the shifts between changes far
-    apart (the farthest within :data:`FARTHEST_DEG`, and one half way), sought near the chained
-    angles; and its standard error, widened for changes used in several pairs."""
-    unrolled_changes, weight = _unrolled_changes(changes, view, angles, rings)
-    return _rate_of(changes, unrolled_changes, weight, times, angles_deg)
-
-
 def _rate_of(changes: list[_Change], unrolled_changes: list[np.ndarray], weight: np.ndarray, times: np.ndarray,
              angles_deg: np.ndarray) -> tuple[float, float]:
-    """:func:`_long_rate` of changes already unrolled; from the pairs about a whole turn apart
-    where there are enough (:data:`CLOSING_DEG`)."""
+    """The rate (degrees a second, signed) of changes unrolled, fitted with an offset to the shifts
+    between changes far apart (the farthest within :data:`FARTHEST_DEG`, and one half way), sought
+    near the chained angles; and its standard error, widened for changes used in several pairs.
+    From the pairs about a whole turn apart where there are enough (:data:`CLOSING_DEG`)."""
     index_of = {changes[i].time_s: i for i in range(len(changes))}
+    correlate = RingCorrelations(unrolled_changes, weight)
     chained = [(index_of[t], float(a)) for t, a in zip(times, angles_deg, strict=True)]
     rows, closings = [], []
     for position, (i, angle_i) in enumerate(chained):
         later = [(k, angle_k) for k, angle_k in chained[position + 1:] if _apart(changes[i], changes[k])]
         far = [(k, angle_k) for k, angle_k in later if abs(angle_k - angle_i) <= FARTHEST_DEG]
         for k, angle_k in {far[-1], far[len(far) // 2]} if far else ():
-            correlation = ring_correlation(unrolled_changes[i], unrolled_changes[k], weight)
+            correlation = correlate(i, k)
             shift, _ = shift_deg(correlation, angle_k - angle_i, 15.0)
             rows.append((changes[k].time_s - changes[i].time_s, shift))
         turns = [(k, angle_k) for k, angle_k in later if abs(abs(angle_k - angle_i) - 360.0) <= CLOSING_DEG]
         if turns:
             k, angle_k = min(turns, key=lambda item: abs(abs(item[1] - angle_i) - 360.0))
             predicted = angle_k - angle_i
-            correlation = ring_correlation(unrolled_changes[i], unrolled_changes[k], weight)
+            correlation = correlate(i, k)
             within = 15.0 + 0.1 * abs(predicted)
             shift, height = shift_deg(correlation, predicted, within)
             if _rival_within(correlation, shift, height, predicted, within):
@@ -511,27 +513,37 @@ def _view_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angl
     +5.9% within +-2.3%; the record's first 0.3 turn: its tilt 2 degrees more or less fell short by
     4 standard errors either way, and moved the rate +4.7% and -3.6%)."""
     coarse = (256, 64)
-    base, _ = _long_rate(changes, view, times, angles_deg, *coarse)
-    found = _chain(changes, view, *coarse)
+    step_px = CENTRE_VARIED * changes[0].first.shape[1]
+    memo: dict[tuple[int, float], tuple[list[np.ndarray], np.ndarray]] = {}
+
+    def unrolled_at(way: int, steps: float) -> tuple[list[np.ndarray], np.ndarray]:  # way -1: the view found
+        if (way, steps) not in memo:
+            memo[(way, steps)] = _unrolled_changes(changes, view if way < 0 else _varied(view, way, steps, step_px),
+                                                   *coarse)
+        return memo[(way, steps)]
+
+    base, _ = _rate_of(changes, *unrolled_at(-1, 0.0), times, angles_deg)
+    found = _chain(changes, *unrolled_at(-1, 0.0))
     if not math.isfinite(base) or found is None:
         return 0.0
 
-    def short(other: DiscView) -> bool:
-        chain = _chain(changes, other, *coarse)
+    def short(way: int, steps: float) -> bool:
+        chain = _chain(changes, *unrolled_at(way, steps))
         return chain is None or _clearly_short_of(chain[0], chain[2], found[0], found[2])
 
-    step_px = CENTRE_VARIED * changes[0].first.shape[1]
     moved = []
     for way in range(len(_WAYS)):
         steps = 1.0
-        if short(_varied(view, way, steps, step_px)):
+        if short(way, steps):
             steps = 0.5
         else:
-            while steps < FARTHEST_STEPS and not short(_varied(view, way, 2.0 * steps, step_px)):
+            while steps < FARTHEST_STEPS and not short(way, 2.0 * steps):
                 steps *= 2.0
-        rate = _long_rate(changes, _varied(view, way, steps, step_px), times, angles_deg, *coarse)[0]
+        rate = _rate_of(changes, *unrolled_at(way, steps), times, angles_deg)[0]
         if math.isfinite(rate):
             moved.append(abs(rate - base))
+        for key in [key for key in memo if key[0] == way]:
+            del memo[key]  # (a few MB each)
     return max(moved) if moved else 0.0
 
 
@@ -560,7 +572,7 @@ def _varied(view: DiscView, way: int, steps: float, step_px: float) -> DiscView:
 def window_rates(kept: list[tuple[int, float, np.ndarray]], angle: PictureAngle, width_px: int,
                  centres_s: np.ndarray, window_s: float) -> list[tuple[float, float, float] | None]:
     """omega(t) from the picture's angle: per window (``centres_s``, ``window_s`` long) the rate
-    and 95% interval (rad/s, magnitudes) fitted as the whole clip's is (:func:`_long_rate`) to the
+    and 95% interval (rad/s, magnitudes) fitted as the whole clip's is (:func:`_rate_of`) to the
     changes inside it, through the clip's view; the interval also holds the clip's own view
     uncertainty, in proportion. None for a window with too few changes or too small a turn."""
     changes = _changes(kept)
