@@ -193,18 +193,17 @@ class _Change:
     time_s: float
     first: np.ndarray
     second: np.ndarray
-
-    @property
-    def difference(self) -> np.ndarray:
-        """``second`` less ``first`` (unrolled at once: the unrolling is linear)."""
-        return self.second - self.first
+    #: ``second`` less ``first``, kept: it is unrolled through every view tried (the unrolling is
+    #: linear, so the change unrolled is the difference of the frames unrolled)
+    difference: np.ndarray
 
 
 def _changes(kept: list[tuple[int, float, np.ndarray]]) -> list[_Change]:
     found = []
     for (index, time_s, image), (next_index, next_s, next_image) in zip(kept, kept[1:], strict=False):
         if next_index == index + 1 and next_s > time_s:
-            found.append(_Change(index, 0.5 * (time_s + next_s), _smoothed(image), _smoothed(next_image)))
+            first, second = _smoothed(image), _smoothed(next_image)
+            found.append(_Change(index, 0.5 * (time_s + next_s), first, second, second - first))
     if len(found) > MOST_CHANGES:
         chosen = np.unique(np.linspace(0, len(found) - 1, MOST_CHANGES).round().astype(int))
         found = [found[i] for i in chosen]
