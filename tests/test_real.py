@@ -396,8 +396,11 @@ def test_the_record_s_windows_and_features_agree_with_its_return() -> None:
 def test_the_wheels_windows_shorter_than_a_turn_are_read_from_the_pictures_turning() -> None:
     """omega(t) in 2 s windows of a wheel that comes back every 2.8 s: no window holds a return,
     and its tracks slide (14 of 44 windows held the truth). The picture's own angle in each window
-    (issue 48, item 3): every window holds the truth, and most lie within 2% of it (the wheel
-    slows about 2% over the clip, the truth being its average)."""
+    (issue 48, item 3): nine in ten windows hold the truth over them, and most lie within 2% of
+    it. Each window is held to its sticker's rate over it, as `make bench-real` holds them: the
+    wheel slows 2% over the clip, and its first seconds turn 1% faster than its mean, which a
+    window's interval need not hold once it is read closely (59% of these held the clip's mean
+    once the view's allowance was measured rather than fixed)."""
     clip = VIDEOS / "bicycle_wheel_frontal.mp4"
     need(clip, "the bicycle wheel video")
     truth = json.loads(clip.with_suffix(".truth.json").read_text())
@@ -405,23 +408,27 @@ def test_the_wheels_windows_shorter_than_a_turn_are_read_from_the_pictures_turni
     windows = analysis.series
     assert windows is not None and len(windows) >= 15
     assert (windows["rate_from"] == "turning").all()
-    held = (windows["omega_low_rad_s"] <= truth["omega"]) & (truth["omega"] <= windows["omega_high_rad_s"])
+    local = np.array([_wheel_truth(t - 1.0, t + 1.0) for t in windows["time_s"]])
+    held = (windows["omega_low_rad_s"] <= local) & (local <= windows["omega_high_rad_s"])
     assert held.mean() >= 0.9
-    assert ((windows["omega_rad_s"] / truth["omega"] - 1).abs() <= 0.02).mean() >= 0.8
+    assert ((windows["omega_rad_s"] / local - 1).abs() <= 0.02).mean() >= 0.8
 
 
 @pytest.mark.slow  # about 10 s: in make test-slow
 def test_a_third_of_the_wheels_turn_with_no_point_tracked_is_read_from_the_picture() -> None:
     """0.3 of a turn of the wheel (0.3-1.13 s), the axis found: no point could be tracked (the
     spokes blur, the rim is plain) and there was no result. The picture's own turning needs no
-    track (issue 49): a result, its interval holding the truth."""
+    track (issue 49): a result, its interval holding the truth over that part (its sticker's
+    rate: the wheel turns 1% faster then than its clip's mean, which the interval, read closely
+    since the view's allowance is measured, no longer reaches)."""
     clip = VIDEOS / "bicycle_wheel_frontal.mp4"
     need(clip, "the bicycle wheel video")
-    truth = json.loads(clip.with_suffix(".truth.json").read_text())
-    analysis = analyze(clip, AnalysisConfig(fixation_px=None, start_s=0.3, end_s=0.3 + 0.3 * 2 * math.pi / 2.27298))
+    end = 0.3 + 0.3 * 2 * math.pi / 2.27298
+    truth = _wheel_truth(0.3, end)
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None, start_s=0.3, end_s=end))
     assert analysis.rate_from == "turning" and analysis.tracks_used == 0
-    assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
-    assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.05)
+    assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
+    assert analysis.omega_rad_s == pytest.approx(truth, rel=0.05)
 
 
 def test_the_wheel_seen_by_a_rolling_camera_is_measured_as_from_a_still_one(tmp_path: Path) -> None:
