@@ -137,20 +137,13 @@ def moving_weight(changes: list[np.ndarray], inside: np.ndarray) -> np.ndarray:
     return (inside & moving[None, :]).astype(np.float32)
 
 
-def ring_correlation(first: np.ndarray, second: np.ndarray, weight: np.ndarray, upsample: int = 8,
-                     taper: float = 12.0) -> np.ndarray:
-    """The normalised correlation of two unrolled pictures (rows: angles) for every shift of the
-    second along the angle (``upsample`` samples a row), over the samples ``weight`` marks in
-    both. Each ring's mean is taken out first: a ring alike at every angle (a record's grooves, a
-    plain rim) says nothing of the angle. Shifts where the two overlap on less than a fifth of
-    the most score -1. (Of many pairs among the same pictures: :class:`RingCorrelations`.)"""
-    return RingCorrelations([first, second], weight, upsample, taper)(0, 1)
-
-
 class RingCorrelations:
-    """:func:`ring_correlation` between any two of ``unrolled`` pictures through one ``weight``:
-    each picture's spectra along the angle are computed once, not once a pair (a chain compares
-    each key change with several; the view's variations compare dozens of pairs)."""
+    """The normalised correlation of any two of ``unrolled`` pictures (rows: angles) for every
+    shift of the second along the angle (``upsample`` samples a row), over the samples ``weight``
+    marks in both. Each ring's mean is taken out first: a ring alike at every angle (a record's
+    grooves, a plain rim) says nothing of the angle. Shifts where the two overlap on less than a
+    fifth of the most score -1. Each picture's spectra along the angle are computed once, not once
+    a pair (a chain compares each key change with several; the view's variations dozens of pairs)."""
 
     def __init__(self, unrolled: list[np.ndarray], weight: np.ndarray, upsample: int = 8,
                  taper: float = 12.0) -> None:
@@ -172,7 +165,7 @@ class RingCorrelations:
         return self._spectra[index]
 
     def __call__(self, first: int, second: int) -> np.ndarray:
-        """The correlation of the ``first`` and the ``second`` picture (see :func:`ring_correlation`)."""
+        """The correlation of the ``first`` and the ``second`` picture."""
         first_spectrum, first_square = self._of(first)
         second_spectrum, second_square = self._of(second)
         spectra = (self._overlap, (np.conj(first_spectrum) * second_spectrum).sum(axis=1),
