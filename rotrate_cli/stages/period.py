@@ -138,6 +138,9 @@ class Period:
         turns_between: how many repeats the closest return first seen spans, as taken
             (:meth:`over`; 1 until then).
         detrended: found only once the slow change was taken out (:data:`DETREND_FRAMES`).
+        sooner_s: the shortest return fitted that matched clearly less well than the one taken
+            (NaN where none): the return taken may then span several repeats, those between
+            spoiled (:func:`rotrate_cli.stages.verdict.judge`).
     """
 
     period_s: float
@@ -154,6 +157,7 @@ class Period:
     turns_guess: int = 1
     turns_between: int = 1
     detrended: bool = False
+    sooner_s: float = math.nan
 
     def over(self, turns: int) -> Period:
         """The repetition where the closest return spans ``turns`` repeats."""
@@ -400,6 +404,9 @@ def _search(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float) 
         return None
     best = min(fit.excess for fit in fits)
     chosen = min((fit for fit in fits if fit.excess <= 2.0 * best + SAME_PICTURE), key=lambda fit: fit.period_s)
+    sooner = [fit.period_s for fit in fits if fit.period_s < chosen.period_s]
+    if sooner:
+        chosen = replace(chosen, sooner_s=min(sooner))
     if profile[1] < FAR_APART:
         return chosen
     return replace(chosen, far_apart=True, turns_guess=_turns_between(profile, times_s, chosen.period_s))
