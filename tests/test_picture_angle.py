@@ -163,3 +163,37 @@ def test_an_oblique_disc_through_a_lens_is_sought_with_either_side_nearer() -> N
     assert angle is not None
     assert abs(angle.omega_rad_s / truth - 1) < 0.005
     assert angle.omega_low_rad_s <= truth <= angle.omega_high_rad_s
+
+
+def _hand_frames(deg_per_frame: float, count: int, size: int = 320) -> tuple[list[Frame], tuple[float, float]]:
+    """A thin dark hand sweeping about the middle of a still face (drawn to a sixteenth of a pixel),
+    with a little noise: a clock's second hand, all else still."""
+    face = np.full((size, size), 225, np.uint8)
+    centre = (size * 0.5, size * 0.5)
+    rng = np.random.default_rng(4)
+    for k in range(12):  # the hour marks: still
+        a = math.radians(30 * k)
+        cv2.line(face, (int(centre[0] + 0.40 * size * math.sin(a)), int(centre[1] - 0.40 * size * math.cos(a))),
+                 (int(centre[0] + 0.46 * size * math.sin(a)), int(centre[1] - 0.46 * size * math.cos(a))), 30, 3)
+    frames = []
+    for index in range(count):
+        a = math.radians(20.0 + deg_per_frame * index)
+        seen = face.copy()
+        tip = (centre[0] + 0.42 * size * math.sin(a), centre[1] - 0.42 * size * math.cos(a))
+        tail = (centre[0] - 0.08 * size * math.sin(a), centre[1] + 0.08 * size * math.cos(a))
+        cv2.line(seen, (round(16 * tail[0]), round(16 * tail[1])), (round(16 * tip[0]), round(16 * tip[1])), 20, 1,
+                 cv2.LINE_AA, shift=4)
+        noisy = np.clip(seen + rng.normal(0.0, 1.5, seen.shape), 0, 255).astype(np.uint8)
+        frames.append(Frame(index, index / FPS, cv2.cvtColor(noisy, cv2.COLOR_GRAY2BGR)))
+    return frames, centre
+
+
+def test_a_thin_hand_sweeping_a_still_face_is_measured() -> None:
+    """Its rings' mean change is the noise's; their rms stands well above it (the moving weight's
+    second rule): a hundred degrees read within its interval (before: no measurement at all)."""
+    frames, centre = _hand_frames(-0.6, 170)  # 100 degrees
+    truth = math.radians(0.6) * FPS
+    angle = _measured(frames, DiscView(centre, 0.0, 0.0, 320.0), search_tilt=False)
+    assert angle is not None
+    assert abs(angle.omega_rad_s / truth - 1) < 0.03
+    assert angle.omega_low_rad_s <= truth <= angle.omega_high_rad_s

@@ -28,6 +28,10 @@ SEARCH_RINGS = 64
 #: Rings whose picture changes less than this from frame to frame (grey levels, on average)
 #: carry nothing.
 MOVING_LEVELS = 1.0
+#: Where fewer rings than this move so, those whose rms change stands this many times above the
+#: quietest quarter of the rings' (the picture's noise) move.
+FEWEST_RINGS = 3
+SPARSE_MOVING = 3.0
 #: Starts refined besides the best about the given centre (apart from it and each other).
 REFINED_STARTS = 2
 #: Times a refinement's simplex search is started again from where it stopped (and gained).
@@ -129,11 +133,22 @@ def moving_weight(changes: list[np.ndarray], inside: np.ndarray) -> np.ndarray:
     differences of consecutive frames), by more than :data:`MOVING_LEVELS` on average over their
     part inside the picture: 1 there (wherever inside the picture), 0 elsewhere. Whole rings, as
     the body's texture passes every angle of its rings in time (a wheel's one sticker), and what
-    stays still within them (a reflection) changes nothing and counts for nothing."""
+    stays still within them (a reflection) changes nothing and counts for nothing. Where fewer
+    than :data:`FEWEST_RINGS` rings move so, those whose rms change stands :data:`SPARSE_MOVING`
+    times above the quietest quarter of the rings' (a thin hand on a still face)."""
     mean = np.mean([np.abs(change) for change in changes], axis=0)
     seen = inside.sum(axis=0)
+    wide = seen >= 0.1 * inside.shape[0]
     ring_mean = (mean * inside).sum(axis=0) / np.maximum(seen, 1)
-    moving = (ring_mean > MOVING_LEVELS) & (seen >= 0.1 * inside.shape[0])
+    moving = (ring_mean > MOVING_LEVELS) & wide
+    if moving.sum() < FEWEST_RINGS and wide.any():
+        # nothing moves over much of a ring: a thin moving part (a clock's hand, a few spokes) moves
+        # few of each ring's pixels by much, which the rings' rms tells from the picture's noise
+        # where their mean does not (a rendered second hand sweeping a still face: its rings' mean
+        # changed 0.13 grey levels, the still face's 0.1; their rms 0.8-1.1 against 0.1-0.25)
+        ring_rms = np.sqrt((np.mean([change * change for change in changes], axis=0) * inside).sum(axis=0)
+                           / np.maximum(seen, 1))
+        moving = (ring_rms > SPARSE_MOVING * float(np.percentile(ring_rms[wide], 25))) & wide
     return (inside & moving[None, :]).astype(np.float32)
 
 
