@@ -66,6 +66,9 @@ MOVING_PX = 5.0
 ROLL_DEG = 0.3
 #: Rounds of (path, background) found in turn.
 ROUNDS = 4
+#: Where the still half after the median step holds no background, the rounds start again from
+#: this many tracks that move least.
+LEAST_MOVING = MIN_BACKGROUND
 
 
 @dataclass(frozen=True)
@@ -121,17 +124,34 @@ def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0,
     # one), then in turn the picture's turn and shift from the still ones and the still ones
     path = steps.median_shift()
     spread = _spread(sub_track, *path.undo(sub_frame, x, y))
-    background = spread <= float(np.median(spread))
     still_px = STILL_PX * pixel_px
-    for _ in range(ROUNDS):
-        path = steps.rigid(background[step_index])
-        spread = _spread(sub_track, *path.undo(sub_frame, x, y))
-        updated = spread <= still_px
-        if updated.sum() < MIN_BACKGROUND:
-            return None
-        if (updated == background).all():
-            break
-        background = updated
+
+    def settled(background: np.ndarray) -> tuple[CameraPath, np.ndarray, np.ndarray] | None:
+        """The camera's path and the still tracks found in turn from a first guess of them."""
+        for _ in range(ROUNDS):
+            path = steps.rigid(background[step_index])
+            spread = _spread(sub_track, *path.undo(sub_frame, x, y))
+            updated = spread <= still_px
+            if updated.sum() < MIN_BACKGROUND:
+                return None
+            if (updated == background).all():
+                break
+            background = updated
+        return path, spread, background
+
+    # the still half after the median step (the background is most of the long tracks where there
+    # is one); else the tracks that move least as they are: a body that fills most of the picture
+    # holds most of the long tracks, and a camera that rolls moves its background less than the
+    # body turns (a textured disc turning 86 degrees a second, the camera rolling 2: 21 of 294
+    # long tracks on the background; from the median the rounds found no still point, and the
+    # roll was added to the rate, +2.3% and good)
+    found = settled(spread <= float(np.median(spread)))
+    if found is None:
+        moved = _spread(sub_track, x, y)
+        found = settled(moved <= np.sort(moved)[min(len(moved), LEAST_MOVING) - 1])
+    if found is None:
+        return None
+    path, spread, background = found
     present = np.zeros(last - first + 1, bool)
     present[np.unique(frame) - first] = True
     centre = np.array([float(np.mean(x)), float(np.mean(y))])
