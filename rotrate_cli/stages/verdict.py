@@ -298,8 +298,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
         # its picture came back best after 8.85 s, five turns, less alike after two and three, and
         # read 0.71 rad/s within [0.044, 0.71] for 3.55): the interval holds every count of turns,
         # up to half a repeat a frame, as nothing measured tells it
-        most = max(1, int(period.lag_frames * period.turns_between / 2))
-        high = max(high, period.over(most).omega_rad_s(repeats)[2])
+        high = max(high, period.over(_most_spanned(period)).omega_rad_s(repeats)[2])
         spanned = True
         weak.append(f"the picture came back sooner too ({period.sooner_s:.4g} s), though less alike: the return "
                     f"taken may span several turns (a camera that wobbles, or a light that changes, spoils those "
@@ -309,9 +308,8 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
         # from one to under half a repeat a frame (rendered boxes at 10 and 25 rad/s, 30 frames/s,
         # no track: the guesses read +100% and +255%)
         weak.append(_far_apart(period))
-        most = max(1, int(period.lag_frames * period.turns_between / 2))
         low = min(low, period.over(1).omega_rad_s(repeats)[1])
-        high = max(high, period.over(most).omega_rad_s(repeats)[2])
+        high = max(high, period.over(_most_spanned(period)).omega_rad_s(repeats)[2])
         spanned = True
     if not confirmed:
         doubt = _look_alike(period, tracks, tracks_used)
@@ -384,10 +382,15 @@ def turns_between(period: Period, tracks: Combined | None, tracks_used: int = 0)
     if not period.far_apart:
         return period
     if tracks is not None and tracks_used >= MIN_TRACKS and 0 < tracks.omega_rad_s < math.inf:
-        most = max(1, int(period.lag_frames * period.turns_between / 2))
         spans = tracks.omega_rad_s / period.over(1).omega_rad_s()[0]
-        return period.over(min(max(1, round(spans)), most))
+        return period.over(min(max(1, round(spans)), _most_spanned(period)))
     return period.over(period.turns_guess)
+
+
+def _most_spanned(period: Period) -> int:
+    """The most repeats the closest return first seen can span: under half a repeat a frame
+    (more, and the frames could not follow the turn)."""
+    return max(1, int(period.lag_frames * period.turns_between / 2))
 
 
 def _tracks_count_turns(period: Period, omega_rad_s: float, tracks: Combined | None, tracks_used: int) -> bool:

@@ -11,7 +11,9 @@ background where, less that path, it stands still. The two are found in turn, fr
 tracks. On a tripod the tracker has already let go of still points (they say nothing about the
 turn), so no background is left and nothing changes; where the tracks that move together do not
 stand still once the path is taken out (the body's own points, a close-up with no background),
-nothing changes either.
+nothing changes either. Where the still half of the long tracks is the body's (a textured disc
+that fills most of the picture holds most of them), the two are found again from the tracks that
+move least: a camera that rolls moves its background less than the body turns.
 
 A camera that rolls or pans smoothly (on a tripod head, or slowly in the hand) does not jolt, and
 a smooth path is also what a body's own points give where they turn together as one picture (the
