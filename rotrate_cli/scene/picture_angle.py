@@ -313,7 +313,7 @@ def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
     score = float(np.median(scores))
     if turned < MIN_TURNED_DEG or score < MIN_SCORE:
         return None
-    rate, scatter = _rate_of(changes, *unrolled_changes, times, angles)
+    rate, scatter = _rate_of(changes, unrolled_changes[2], times, angles)
     del unrolled_changes
     if not math.isfinite(rate):
         return None
@@ -328,14 +328,21 @@ def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
                         times, angles, turned, score, view, alike, first_step, scores)
 
 
-def _unrolled_changes(changes: list[_Change], view: DiscView, angles: int, rings: int) -> tuple[list[np.ndarray],
-                                                                                                  np.ndarray]:
+#: Changes unrolled through a view, the weight of their moving rings, and their correlations.
+_Unrolled = tuple[list[np.ndarray], np.ndarray, RingCorrelations]
+
+
+def _unrolled_changes(changes: list[_Change], view: DiscView, angles: int, rings: int) -> _Unrolled:
+    """The changes unrolled through ``view``, the weight of their moving rings, and their
+    correlations (one for the chain and the rate alike: each change's spectra computed once)."""
     maps = unrolled(changes[0].first.shape, view, angles, rings)
     unrolled_changes = [maps.of(change.difference) for change in changes]
-    return unrolled_changes, moving_weight(unrolled_changes, maps.inside)
+    weight = moving_weight(unrolled_changes, maps.inside)
+    return unrolled_changes, weight, RingCorrelations(unrolled_changes, weight)
 
 
-def _chain(changes: list[_Change], unrolled_changes: list[np.ndarray], weight: np.ndarray) -> tuple[
+def _chain(changes: list[_Change], unrolled_changes: list[np.ndarray], weight: np.ndarray,
+           correlate: RingCorrelations) -> tuple[
         np.ndarray, np.ndarray, np.ndarray, float | None, float] | None:
     """The angle at each change (unrolled through a view), chained from nearby ones (the latest
     key change sharing no frame); the peaks' heights; the first step's alternative shift (see
@@ -349,7 +356,6 @@ def _chain(changes: list[_Change], unrolled_changes: list[np.ndarray], weight: n
     if len(ordinary) < MIN_CHANGES:
         return None
     start = int(ordinary[0])
-    correlate = RingCorrelations(unrolled_changes, weight)
     rate, first_step, alike = _first_rate(changes, correlate, ordinary)
     measured: dict[int, float] = {start: 0.0}
     heights: dict[int, float] = {start: 1.0}
@@ -415,14 +421,13 @@ def _recent_rate(points: list[tuple[float, float]]) -> float | None:
     return float(np.median(slopes)) if slopes else None
 
 
-def _rate_of(changes: list[_Change], unrolled_changes: list[np.ndarray], weight: np.ndarray, times: np.ndarray,
+def _rate_of(changes: list[_Change], correlate: RingCorrelations, times: np.ndarray,
              angles_deg: np.ndarray) -> tuple[float, float]:
     """The rate (degrees a second, signed) of changes unrolled, fitted with an offset to the shifts
     between changes far apart (the farthest within :data:`FARTHEST_DEG`, and one half way), sought
     near the chained angles; and its standard error, widened for changes used in several pairs.
     From the pairs about a whole turn apart where there are enough (:data:`CLOSING_DEG`)."""
     index_of = {changes[i].time_s: i for i in range(len(changes))}
-    correlate = RingCorrelations(unrolled_changes, weight)
     chained = [(index_of[t], float(a)) for t, a in zip(times, angles_deg, strict=True)]
     rows, closings = [], []
     for position, (i, angle_i) in enumerate(chained):
@@ -513,15 +518,15 @@ def _view_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angl
     4 standard errors either way, and moved the rate +4.7% and -3.6%)."""
     coarse = (256, 64)
     step_px = CENTRE_VARIED * changes[0].first.shape[1]
-    memo: dict[tuple[int, float], tuple[list[np.ndarray], np.ndarray]] = {}
+    memo: dict[tuple[int, float], _Unrolled] = {}
 
-    def unrolled_at(way: int, steps: float) -> tuple[list[np.ndarray], np.ndarray]:  # way -1: the view found
+    def unrolled_at(way: int, steps: float) -> _Unrolled:  # way -1: the view found
         if (way, steps) not in memo:
             memo[(way, steps)] = _unrolled_changes(changes, view if way < 0 else _varied(view, way, steps, step_px),
                                                    *coarse)
         return memo[(way, steps)]
 
-    base, _ = _rate_of(changes, *unrolled_at(-1, 0.0), times, angles_deg)
+    base, _ = _rate_of(changes, unrolled_at(-1, 0.0)[2], times, angles_deg)
     found = _chain(changes, *unrolled_at(-1, 0.0))
     if not math.isfinite(base) or found is None:
         return 0.0
@@ -538,7 +543,7 @@ def _view_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angl
         else:
             while steps < FARTHEST_STEPS and not short(way, 2.0 * steps):
                 steps *= 2.0
-        rate = _rate_of(changes, *unrolled_at(way, steps), times, angles_deg)[0]
+        rate = _rate_of(changes, unrolled_at(way, steps)[2], times, angles_deg)[0]
         if math.isfinite(rate):
             moved.append(abs(rate - base))
         for key in [key for key in memo if key[0] == way]:
@@ -583,7 +588,7 @@ def window_rates(kept: list[tuple[int, float, np.ndarray]], angle: PictureAngle,
                 angle.omega_high_rad_s - angle.omega_rad_s) / angle.omega_rad_s
     times = np.array([change.time_s for change in changes])
     chained = np.interp(times, angle.times_s, angle.angles_deg)
-    unrolled_changes, weight = _unrolled_changes(changes, view, ANGLES, RINGS)
+    unrolled_changes, weight, _ = _unrolled_changes(changes, view, ANGLES, RINGS)
     rates: list[tuple[float, float, float] | None] = []
     for centre in centres_s:
         inside = np.flatnonzero(np.abs(times - centre) <= window_s / 2 + 1e-9)
@@ -591,7 +596,8 @@ def window_rates(kept: list[tuple[int, float, np.ndarray]], angle: PictureAngle,
             rates.append(None)
             continue
         part = [changes[i] for i in inside]
-        rate, scatter = _rate_of(part, [unrolled_changes[i] for i in inside], weight, times[inside], chained[inside])
+        correlate = RingCorrelations([unrolled_changes[i] for i in inside], weight)
+        rate, scatter = _rate_of(part, correlate, times[inside], chained[inside])
         if not math.isfinite(rate):
             rates.append(None)
             continue
