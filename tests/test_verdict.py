@@ -108,3 +108,21 @@ def test_a_look_alike_half_turn_is_not_a_symmetric_body() -> None:
     assert verdict.quality == "weak"
     assert not any("repeats 2 times" in note for note in verdict.notes)
     assert verdict.omega_low_rad_s <= turn / 2 * 1.04 * 0.95 <= verdict.omega_high_rad_s
+
+
+def test_tracks_that_rule_out_a_turn_give_the_rate_of_an_exact_look_alike_return() -> None:
+    """EPFL car 02's 45th to 94th photographs: its picture came back after 50 s as exactly as after a
+    turn (+99% as a turn), and its tracks turned 47% of a turn in that time (-5.6%), their
+    interval's top well under the return's rate. The tracks' rate is reported, weak, and the
+    interval holds both."""
+    exact = Period(50.0, 49.9, 50.1, 1, 45, 0.05, 0.8, 0.0, 0.05, 30.0)
+    turn = 2 * math.pi / 50.0
+    tracks = _tracks(0.47 * turn, 0.3, 40)  # too loose to tell a count of repeats
+    verdict = judge(tracks, exact, 40)
+    assert (verdict.quality, verdict.rate_from) == ("weak", "tracks")
+    assert verdict.omega_rad_s == pytest.approx(0.47 * turn)
+    assert verdict.omega_low_rad_s <= 0.47 * turn * 0.7 and verdict.omega_high_rad_s >= turn
+    assert any("well under a turn" in note for note in verdict.notes)
+    # tracks whose interval reaches near the return's rate leave the return's rate reported
+    near = judge(_tracks(0.8 * turn, 0.3, 40), exact, 40)
+    assert near.rate_from == "repetition"

@@ -26,8 +26,10 @@ turn on (a car's far side half a turn on), not a turn: where it does not come ba
 (:data:`LOOK_ALIKE_EXCESS`), or the tracks turn well under a turn in that time
 (:data:`UNDER_TURN`), and informative tracks do not confirm it, the result is weak. Where the
 tracks gave a rate there, either reading may be the truth: the 95% interval spans both (the
-repetition's, and the tracks' interval), and an inexact return gives way to the tracks' rate (on the
-EPFL cars' first 50-70 photographs the return read +91% to +101%, the tracks -1% to -53%).
+repetition's, and the tracks' interval), and the tracks' rate is reported where the return is not
+exact or their interval's top lies well under the return's rate (on the EPFL cars' first 50-70
+photographs the return read +91% to +101%, the tracks -1% to -53%; car 02's 45th to 94th came back
+as exactly as a turn, +99%, its tracks 47% of a turn in that time, -5.6%).
 
 The quality is ``weak`` when the interval is wider than :data:`WEAK_HALF_WIDTH` of the rate,
 when fewer than :data:`MIN_TRACKS` tracks stand behind a tracks-only result, or when the
@@ -321,10 +323,17 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                 repeated = omega
                 low, high = min(low, tracks.omega_low_rad_s), max(high, tracks.omega_high_rad_s)
                 spanned = True
-                if period.excess > LOOK_ALIKE_EXCESS:
+                # the tracks' rate where the return is not exact, or where they rule out a turn in
+                # that time: their interval's top well under the return's rate (EPFL car 02's 45th to
+                # 94th photographs: its picture back after 50 s as exactly as a turn, +99%; its
+                # tracks 47% of a turn in that time, -5.6%, and the look-alike view half a turn on)
+                under = _tracks_under(period, tracks, tracks_used)
+                if period.excess > LOOK_ALIKE_EXCESS or under:
                     omega, rate_from = tracks.omega_rad_s, "tracks"
-                reported = ("the tracks' rate is reported, as the return is not exact" if rate_from == "tracks"
-                            else "the repetition's rate is reported, as the return is exact")
+                reported = ("the repetition's rate is reported, as the return is exact" if rate_from != "tracks"
+                            else "the tracks' rate is reported, as the return is not exact"
+                            if period.excess > LOOK_ALIKE_EXCESS
+                            else "the tracks' rate is reported, as they turn well under a turn in that time")
                 notes.append(f"the 95% interval spans both readings: the repetition's {repeated:.4g} rad/s if the "
                              f"picture's return is a turn, the tracks' {tracks.omega_rad_s:.4g} rad/s if it is a "
                              f"look-alike view; {reported}")
@@ -423,18 +432,23 @@ def _look_alike(period: Period, tracks: Combined | None, tracks_used: int) -> st
     where neither holds."""
     if not period.frames < 2 * period.lag_frames:  # the clip holds a second return (or could)
         return None
-    omega = period.omega_rad_s()[0]
     said = f"the picture comes back only once in the clip (after {period.period_s:.4g} s)"
     if period.excess > LOOK_ALIKE_EXCESS:
         return (f"{said}, and not exactly: it may be a view that looks alike part of a turn on (a car half a "
                 "turn on) rather than a turn; a clip of two turns or more settles it")
-    if (tracks is not None and tracks_used >= MIN_TRACKS and math.isfinite(top := _tracks_top(tracks))
-            and 0 < top * UNDER_TURN < omega):
+    if tracks is not None and _tracks_under(period, tracks, tracks_used):
         turned = tracks.omega_rad_s * period.period_s / (2.0 * math.pi)
         return (f"{said}, but the tracks turn only {turned:.0%} of a turn in that time ({tracks.omega_rad_s:.4g} "
                 "rad/s): it may be a view that looks alike part of a turn on (a car half a turn on); a clip of "
                 "two turns or more settles it")
     return None
+
+
+def _tracks_under(period: Period, tracks: Combined | None, tracks_used: int) -> bool:
+    """True where informative tracks turn well under a turn in the time the picture takes to come
+    back: the top of their interval :data:`UNDER_TURN` times under the return's rate."""
+    return (tracks is not None and tracks_used >= MIN_TRACKS and math.isfinite(top := _tracks_top(tracks))
+            and 0 < top * UNDER_TURN < period.omega_rad_s()[0])
 
 
 def _tracks_top(tracks: Combined) -> float:
