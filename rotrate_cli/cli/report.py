@@ -57,6 +57,8 @@ def _rate_from_text(analysis: Analysis) -> str:
     """Where the reported rate comes from, in words."""
     period = analysis.period
     if analysis.rate_from == "turning":
+        if analysis.verdict is not None and analysis.verdict.thin_part:
+            return "the picture's turning: a thin part's angle (a hand, a needle) against the still picture"
         return "the picture's turning: its angle about the axis, frame by frame"
     if analysis.rate_from != "repetition" or period is None:
         return "the tracks' fits"

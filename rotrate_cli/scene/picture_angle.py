@@ -127,6 +127,8 @@ class PictureAngle:
             fast), or None.
         first_step_deg: the first step measured, against which ``alike_deg`` is an alternative.
         heights: each change's peak (after the first, at ``times_s[1:]``), or None.
+        thin_part: measured from a thin part against the clip's still picture (a clock's hand:
+            :mod:`rotrate_cli.scene.hand`), not from the picture's changes.
     """
 
     omega_rad_s: float
@@ -141,6 +143,7 @@ class PictureAngle:
     alike_deg: float | None = None
     first_step_deg: float = 0.0
     heights: np.ndarray | None = None
+    thin_part: bool = False
 
 
 class AngleFrames:

@@ -11,6 +11,7 @@ import numpy as np
 
 from rotrate_cli.fitting.outliers import Combined
 from rotrate_cli.runtime.lazy import pandas as pd
+from rotrate_cli.scene import hand
 from rotrate_cli.scene.disc import DiscView
 from rotrate_cli.scene.picture_angle import PictureAngle, measure_angle, window_rates
 from rotrate_cli.scene.sense import not_side_view
@@ -42,6 +43,12 @@ def picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFram
     # (no track at all tells no view: the picture's own changes are the only evidence)
     width = footage.info.width_px
     kept = footage.pairs.angle_frames.frames
+    # a thin part turning over a still picture (a clock's hand) first: quick, and where it reads a
+    # rate closely, the picture's changes (a few hand pixels, or none between a ticking hand's
+    # steps) have no more to say
+    thin = hand.measure_hand(kept, width, steadied=footage.shake is not None)
+    if thin is not None and _half_width(thin) <= WEAK_HALF_WIDTH:
+        return thin
     if view is not None:
         start = DiscView(view.centre_px, view.across_deg, 90.0 - view.elevation_deg, float(width))
     else:
@@ -49,8 +56,16 @@ def picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFram
         if not (math.isfinite(centre[0]) and math.isfinite(centre[1])):
             centre = (width / 2.0, footage.info.height_px / 2.0)
         start = DiscView(centre, 0.0, 0.0, float(width))
-    return measure_angle(kept, start, width, search_tilt=view is None,
-                         search_centre=view is None and geometry.fixation_found)
+    changes = measure_angle(kept, start, width, search_tilt=view is None,
+                            search_centre=view is None and geometry.fixation_found)
+    readings = [reading for reading in (thin, changes) if reading is not None]
+    return min(readings, key=_half_width) if readings else None
+
+
+def _half_width(angle: PictureAngle) -> float:
+    """The larger half of the reading's interval, as a share of its rate."""
+    half = max(angle.omega_rad_s - angle.omega_low_rad_s, angle.omega_high_rad_s - angle.omega_rad_s)
+    return half / angle.omega_rad_s
 
 
 #: A view whose axis lies nearer the image plane than this (degrees out of it, as the paths tell)
@@ -78,6 +93,8 @@ def angle_windows(footage: Footage, angle: Callable[[], PictureAngle | None]) ->
         measured = angle()
         if measured is None:
             return [None] * len(centres_s)
+        if measured.thin_part:
+            return hand.window_rates(measured, centres_s, window_s)
         return window_rates(footage.pairs.angle_frames.frames, measured, footage.info.width_px, centres_s, window_s)
 
     return rates

@@ -228,6 +228,8 @@ class Verdict:
         notes: what the user should know about how the two measurements compared.
         repeats_told_by: with the repetition, what told how many repeats make a turn (``the
             tracks' rate``, ``the picture's turning``); "" where nothing told it.
+        thin_part: with the picture's turning, True where it is a thin part's against the clip's
+            still picture (a clock's hand: :mod:`rotrate_cli.scene.hand`).
     """
 
     omega_rad_s: float
@@ -239,6 +241,7 @@ class Verdict:
     weak_because: tuple[str, ...]
     notes: tuple[str, ...]
     repeats_told_by: str = ""
+    thin_part: bool = False
 
 
 def _half_width(omega: float, low: float, high: float) -> float:
@@ -288,7 +291,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
         if tracks is not None and 0 < tracks.omega_rad_s < math.inf:
             told = replace(told, spanned_by=(tracks.omega_low_rad_s, tracks.omega_high_rad_s))
     omega, low, high = period.omega_rad_s(repeats)
-    rate_from, spanned = "repetition", False
+    rate_from, spanned, thin_part = "repetition", False, False
     if not confirmed:  # the interval holds every count of repeats a turn still open: weak for that already
         low = min(low, period.omega_rad_s(max(told.candidates))[1])
         spanned = True
@@ -344,13 +347,14 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                          f"{high:.4g}] for a turn); its own turning, measured more closely over the clip, agrees "
                          "and gives the rate")
             omega, low, high, rate_from = closer.omega_rad_s, closer.omega_low_rad_s, closer.omega_high_rad_s, "turning"
+            thin_part = closer.thin_part
     if period.drift_s > CHANGE_FRACTION * period.period_s:
         notes.append(f"the rate changes over the clip (its halves repeat {period.drift_s / period.period_s:.1%} "
                      "apart); the result is an average: see omega(t) with `window_s`")
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not spanned:  # spanned: weak for its doubt already
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, rate_from, repeats, "weak" if weak else "good", tuple(weak), tuple(notes),
-                   told.told_by if confirmed else "")
+                   told.told_by if confirmed else "", thin_part)
 
 
 #: A return seen once whose interval is narrower than this (half, of its rate) is not set against
@@ -484,7 +488,10 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
     omega, low, high = angle.omega_rad_s, angle.omega_low_rad_s, angle.omega_high_rad_s
     weak: list[str] = []
     notes = [f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, measured through "
-             f"the plane's view (tilted {angle.view.tilt_deg:.0f} degrees)"]
+             f"the plane's view (tilted {angle.view.tilt_deg:.0f} degrees)" if not angle.thin_part else
+             f"the rate is the picture's own turning: a thin part (a hand, a needle) against the clip's still picture, "
+             f"{angle.turned_deg:.0f} degrees seen turned (its plane tilted {angle.view.tilt_deg:.0f} degrees, as its "
+             "length shows)"]
     # the ``doubts`` are of the tracks' rate: told only where it is the one reported
     if angle.alike_deg is not None and angle.first_step_deg != 0:
         other = omega * abs(angle.alike_deg / angle.first_step_deg)
@@ -527,4 +534,5 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
                          "grooves or rims, or stay on reflections): they do not stand behind the rate")
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not weak:
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
-    return Verdict(omega, low, high, "turning", 1, "weak" if weak else "good", tuple(weak), tuple(notes))
+    return Verdict(omega, low, high, "turning", 1, "weak" if weak else "good", tuple(weak), tuple(notes),
+                   thin_part=angle.thin_part)
