@@ -38,7 +38,8 @@ def _face() -> np.ndarray:
 def _hand(image: np.ndarray, clock_deg: float, length: float, width: int, grey: float) -> None:
     """A hand from a little behind the centre out to ``length``, at ``clock_deg`` (clockwise from 12)."""
     a, s = math.radians(clock_deg), 16
-    cv2.line(image, (int(s * (CENTRE[0] - 0.15 * length * math.sin(a))), int(s * (CENTRE[1] + 0.15 * length * math.cos(a)))),
+    tail = (int(s * (CENTRE[0] - 0.15 * length * math.sin(a))), int(s * (CENTRE[1] + 0.15 * length * math.cos(a))))
+    cv2.line(image, tail,
              (int(s * (CENTRE[0] + length * math.sin(a))), int(s * (CENTRE[1] - length * math.cos(a)))),
              grey, width, cv2.LINE_AA, shift=4)
 

@@ -53,6 +53,11 @@ THROUGH_SHARE = 0.03
 #: Once the axis is first placed, the needles' pixels within this share of the hand's reach of it are
 #: let go, and the axis placed again.
 HUB_SHARE = 0.2
+#: A steadied frame is shifted onto the still picture where their phase correlation peaks at least
+#: this high (lower peaks: a frame whose steadying left the picture's edges far from the first
+#: frame's, shifted by them), by at most this much (px of the frames used).
+LINED_UP = 0.3
+LINED_UP_MOST_PX = 12.0
 #: The face is lined up with the still picture at this many angles a turn, over rings from the first
 #: to the second share of the hand's reach, the hand's own angle left out (within this, degrees);
 #: where its unrolled pictures are alike to less than this (their normalised correlation, median),
@@ -69,12 +74,21 @@ OFF_AXIS_SHARE = 0.2
 #: and length: another part that moves a little (a clock's minute hand) is left out.
 WEDGE_DEG = 8.0
 #: The hand must turn this far over the clip (degrees), and its angles keep this close to a steady
-#: turn (rms, of the angle turned): a swinging pendulum does not.
+#: turn (a robust rms, of the angle turned, and degrees): a swinging pendulum does not, nor a
+#: needle taken for another from frame to frame (a ticking hand's steps of 6 degrees: 1.7).
 MIN_TURNED_DEG = 15.0
 MOST_SCATTER_SHARE = 0.1
+MOST_SCATTER_DEG = 8.0
+#: The needles are sought again within this share of the hand's reach of the axis first placed...
+AROUND_REACH = 1.3
+#: ... where a frame whose difference holds a second piece this long (of the longest) shows several parts
+#: alike (six spokes: one taken for another from frame to frame read three times too fast).
+RIVAL_SHARE = 0.6
 #: Frames whose angle or length misfits a steady turn by more than this many (robust) scatters are
 #: left out.
 OUTLYING = 4.0
+#: ... but no more than this share of them.
+MOST_LEFT_OUT = 0.2
 #: The lengths are read as this quantile of the needle's pixels along it.
 LENGTH_QUANTILE = 98.0
 #: A needle's direction is read to about this much (px of the frames used) at its tip, whatever its
@@ -115,28 +129,20 @@ def measure_hand(kept: list[tuple[int, float, np.ndarray]], width_px: int,
     times = np.array([time_s for time_s, _ in chosen])
     images = np.stack([cv2.GaussianBlur(image.astype(np.float32), (0, 0), 1.0) for _, image in chosen])
     still = np.median(images, axis=0)
-    differences = np.abs(images - still)
-    noise = 1.4826 * float(np.median(differences)) + 1e-6
-    needles = [_needle(difference, noise) for difference in differences]
-    found = [k for k, needle in enumerate(needles) if needle is not None]
-    if len(found) < max(MIN_FRAMES, NEEDLE_SHARE * len(chosen)):
+    if steadied:
+        # a moving camera's frames, steadied from its background's tracks, may still sit a few
+        # pixels off (a rolling, wobbling camera's first frames: 4 px): each is lined up with the
+        # still picture again where the two clearly match
+        images = _lined_up(images, still)
+        still = np.median(images, axis=0)
+    needed = max(MIN_FRAMES, NEEDLE_SHARE * len(chosen))
+    placed = _needles_and_axis(images, still, needed)
+    if placed is None:
         return None
-    lines = [needles[k] for k in found]
-    centre = _crossing(lines)
-    if centre is None:
-        return None
-    # again without the hub (its cap, a counterweight, and where a hand that turns little lies in
-    # the still picture too): the lines' far parts place the axis
-    reach = float(np.median([np.max(np.hypot(line.x - centre[0], line.y - centre[1])) for line in lines]))
-    beyond = [(k, _beyond(needles[k], centre, HUB_SHARE * reach)) for k in found]
-    found = [k for k, line in beyond if line is not None]
-    lines = [line for _, line in beyond if line is not None]
-    centre = _crossing(lines) if len(lines) >= max(MIN_FRAMES, NEEDLE_SHARE * len(chosen)) else None
-    if centre is None:
-        return None
+    found, lines, centre = placed
     read = [_angle_and_length(needle, centre) for needle in lines]
     good = np.array([reading is not None for reading in read])
-    if good.sum() < max(MIN_FRAMES, NEEDLE_SHARE * len(chosen)):
+    if good.sum() < needed:
         return None
     angles = np.unwrap(np.array([reading[0] for reading in read if reading is not None]))
     lengths = np.array([reading[1] for reading in read if reading is not None])
@@ -145,16 +151,45 @@ def measure_hand(kept: list[tuple[int, float, np.ndarray]], width_px: int,
     # the angles against the face the hand turns over: the steady turn that a moving camera's
     # steadying left (the face turned with it) is taken out, and how well it is known kept
     face = _face_turns(images[frames], still, centre, float(np.median(lengths)), angles) if steadied else None
-    face_rate, face_se = 0.0, 0.0
+    face_se = 0.0
     if face is not None:
         t = times - times.mean()
         line = np.polyfit(t, face, 1)
-        face_rate = float(line[0])
         face_se = float(np.std(face - np.polyval(line, t), ddof=2)) / math.sqrt(float(np.sum(t ** 2)))
-        angles = angles - face_rate * t
+        angles = angles - float(line[0]) * t
     if float(np.median([_off_line(line, centre) for line in lines])) > THROUGH_SHARE * float(np.median(lengths)):
         return None  # the lines do not meet in one point: not a part turning about an axis
     return _fitted(times, angles, lengths, centre, width_px / still.shape[1], len(found) / len(chosen), face_se)
+
+
+def _needles_and_axis(images: np.ndarray, still: np.ndarray,
+                      needed: float) -> tuple[list[int], list[_Needle], np.ndarray] | None:
+    """The frames whose difference from ``still`` is a needle, their needles (the hub's pixels let
+    go) and the axis where their lines cross; None where fewer than ``needed`` frames show one, or
+    the lines do not cross. Twice: the axis first placed from each frame's longest piece, then the
+    needles sought again within the hand's reach of it (:data:`AROUND_REACH`), where a second
+    piece alike tells several parts (:data:`RIVAL_SHARE`), and what lies farther off (a steadied
+    frame's edges, someone passing) does not count."""
+    differences = np.abs(images - still)
+    noise = 1.4826 * float(np.median(differences)) + 1e-6
+    region = None
+    for _ in range(2):
+        needles = [_needle(difference, noise, region) for difference in differences]
+        found = [k for k, needle in enumerate(needles) if needle is not None]
+        if len(found) < needed:
+            return None
+        centre = _crossing([needles[k] for k in found])
+        if centre is None:
+            return None
+        reach = float(np.median([np.max(np.hypot(needles[k].x - centre[0], needles[k].y - centre[1])) for k in found]))
+        region = (centre, AROUND_REACH * reach)
+    # again without the hub (its cap, a counterweight, and where a hand that turns little lies in
+    # the still picture too): the lines' far parts place the axis
+    beyond = [(k, _beyond(needles[k], centre, HUB_SHARE * reach)) for k in found]
+    found = [k for k, line in beyond if line is not None]
+    lines = [line for _, line in beyond if line is not None]
+    centre = _crossing(lines) if len(lines) >= needed else None
+    return None if centre is None else (found, lines, centre)
 
 
 def _one_per_run(kept: list[tuple[int, float, np.ndarray]]) -> list[tuple[float, np.ndarray]]:
@@ -167,8 +202,14 @@ def _one_per_run(kept: list[tuple[int, float, np.ndarray]]) -> list[tuple[float,
     return chosen
 
 
-def _needle(difference: np.ndarray, noise: float) -> _Needle | None:
-    """The frame's difference from the still picture as a line, or None where it is no needle."""
+def _needle(difference: np.ndarray, noise: float,
+            region: tuple[np.ndarray, float] | None = None) -> _Needle | None:
+    """The frame's difference from the still picture as a line, or None where it is no needle.
+    ``region``: only within this far of this point, and no second piece alike there."""
+    if region is not None:
+        (cx, cy), radius = region
+        rows_at, columns_at = np.ogrid[:difference.shape[0], :difference.shape[1]]
+        difference = np.where((columns_at - cx) ** 2 + (rows_at - cy) ** 2 <= radius ** 2, difference, 0.0)
     strongest = float(np.percentile(difference, STRONGEST_QUANTILE))
     mask = (difference > max(NOISE_LEVELS * noise, STRONGEST_SHARE * strongest)).astype(np.uint8)
     if int(mask.sum()) < MIN_PIXELS:
@@ -180,7 +221,10 @@ def _needle(difference: np.ndarray, noise: float) -> _Needle | None:
     if count < 2:
         return None
     extents = np.hypot(stats[1:, cv2.CC_STAT_WIDTH], stats[1:, cv2.CC_STAT_HEIGHT])
-    rows, columns = np.nonzero(mask.astype(bool) & (labels == 1 + int(np.argmax(extents))))
+    order = np.argsort(-extents)
+    if region is not None and len(order) > 1 and extents[order[1]] >= RIVAL_SHARE * extents[order[0]]:
+        return None  # several parts alike (spokes, blades): which is which is not told frame to frame
+    rows, columns = np.nonzero(mask.astype(bool) & (labels == 1 + int(order[0])))
     if len(rows) < MIN_PIXELS:
         return None
     x, y = columns.astype(np.float64), rows.astype(np.float64)
@@ -207,6 +251,24 @@ def _line(x: np.ndarray, y: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray,
                         [np.average(dx * dy, weights=weight), np.average(dy * dy, weights=weight)]])
     values, vectors = np.linalg.eigh(moments)
     return centroid, vectors[:, 1], values
+
+
+def _lined_up(images: np.ndarray, still: np.ndarray) -> np.ndarray:
+    """Each image shifted onto ``still`` (phase correlation over the whole picture; the shift where
+    it is clear: :data:`LINED_UP`). Over the clock's face alone, mostly plain, the shifts were
+    noisier: the rolling clocks' intervals three to ten times as wide."""
+    height, width = still.shape
+    window = cv2.createHanningWindow((width, height), cv2.CV_32F)
+    lined = np.empty_like(images)
+    for k, image in enumerate(images):
+        (dx, dy), response = cv2.phaseCorrelate(still, image, window)
+        if response < LINED_UP or math.hypot(dx, dy) > LINED_UP_MOST_PX:
+            lined[k] = image
+            continue
+        shift = np.array([[1.0, 0.0, -dx], [0.0, 1.0, -dy]])
+        lined[k] = cv2.warpAffine(image, shift, (width, height), flags=cv2.INTER_LINEAR,
+                                  borderMode=cv2.BORDER_REPLICATE)
+    return lined
 
 
 def _face_turns(images: np.ndarray, still: np.ndarray, centre: np.ndarray, reach_px: float,
@@ -319,7 +381,8 @@ def _fitted(times: np.ndarray, angles: np.ndarray, lengths: np.ndarray, centre: 
     if math.degrees(turned) < MIN_TURNED_DEG or len(times) < MIN_FRAMES:
         return None
     t = times - times.mean()
-    if float(np.std(angles - np.polyval(np.polyfit(t, angles, 1), t))) > MOST_SCATTER_SHARE * turned:
+    scatter = _robust_scale(angles - np.polyval(np.polyfit(t, angles, 1), t))
+    if scatter > min(MOST_SCATTER_SHARE * turned, math.radians(MOST_SCATTER_DEG)):
         return None
     fitted = _stretched_fit(t, angles, lengths)
     if fitted is None:
@@ -372,42 +435,66 @@ def _stretched_fit(t: np.ndarray, angles: np.ndarray,
     """One steady turn of a hand seen through a stretch of the plane's picture, fitted to the
     angles and lengths (each kind weighed by its own scatter), the frames whose angle or length
     lies far off it (:data:`OUTLYING`: the hand's tip lost over a dark mark, or crossing another
-    hand) left out in turn: the parameters (start, rate, the stretch's two numbers, the length),
-    their covariance, and which frames were kept; None where too few are left."""
-    from scipy.optimize import least_squares  # imported here: it weighs on every run's start otherwise
-
-    kept = np.ones(len(t), bool)
-    params = None
-    # the scatters are at least what the pixel grid allows (:data:`READ_PX`, half of it either way)
+    hand) left out, up to :data:`MOST_LEFT_OUT` of them: the parameters (start, rate, the
+    stretch's two numbers, the length), their covariance (widened by the misfit beyond the
+    scatters), and which frames were kept; None where it cannot be had."""
+    line = np.polyfit(t, angles, 1)
+    start = np.r_[line[1], line[0], 0.0, 0.0, np.median(lengths)]
+    # a robust fit first (each kind weighed by its robust scatter about the last fit), whose far-off
+    # frames (OUTLYING times that scatter, or what the pixel grid allows: READ_PX, half of it either
+    # way) are let go, the worst MOST_LEFT_OUT at most; then the plain fit of those kept
     floors = (0.5 * READ_PX / float(np.median(lengths)), 0.5 * READ_PX)
-    for _ in range(3):
-        tk, ak, lk = t[kept], angles[kept], lengths[kept]
-        line = np.polyfit(tk, ak, 1)
-        scales = [max(_robust_scale(ak - np.polyval(line, tk)), floors[0]),
-                  max(_robust_scale(lk - np.median(lk)), floors[1])]
-
-        def residuals(values: np.ndarray, tk=tk, ak=ak, lk=lk, scales=scales) -> np.ndarray:
-            return np.r_[_misfits(values, tk, ak, lk)[0] / scales[0], _misfits(values, tk, ak, lk)[1] / scales[1]]
-
-        start = np.r_[line[1], line[0], 0.0, 0.0, np.median(lk)] if params is None else params
-        fit = least_squares(residuals, start)
-        angle_misfit, length_misfit = _misfits(fit.x, tk, ak, lk)
-        scales[:] = [max(_robust_scale(angle_misfit), floors[0]), max(_robust_scale(length_misfit), floors[1])]
-        fit = least_squares(residuals, fit.x)
-        params = fit.x
-        angle_misfit, length_misfit = _misfits(params, t, angles, lengths)
-        outlying = (np.abs(angle_misfit) > OUTLYING * scales[0]) | (np.abs(length_misfit) > OUTLYING * scales[1])
-        if not np.any(outlying & kept):
-            break
-        kept &= ~outlying
-        if kept.sum() < MIN_FRAMES:
-            return None
-    dof = max(len(fit.fun) - len(fit.x), 1)
+    params, scales = _weighed_fit(t, angles, lengths, start, "soft_l1")
+    angle_misfit, length_misfit = _misfits(params, t, angles, lengths)
+    off = np.maximum(np.abs(angle_misfit) / max(scales[0], floors[0]),
+                     np.abs(length_misfit) / max(scales[1], floors[1]))
+    kept = off <= OUTLYING
+    if kept.sum() < (1 - MOST_LEFT_OUT) * len(t):
+        kept = off <= np.quantile(off, 1 - MOST_LEFT_OUT)
+    if kept.sum() < MIN_FRAMES:
+        return None
+    params, scales = _weighed_fit(t[kept], angles[kept], lengths[kept], params, "linear")
+    fit_misfits = _misfits(params, t[kept], angles[kept], lengths[kept])
+    normalised = np.r_[fit_misfits[0] / scales[0], fit_misfits[1] / scales[1]]
+    jacobian = _jacobian(params, t[kept], angles[kept], lengths[kept], scales)
+    dof = max(len(normalised) - len(params), 1)
     try:
-        covariance = np.linalg.inv(fit.jac.T @ fit.jac) * max(float(fit.fun @ fit.fun) / dof, 1.0)
+        covariance = np.linalg.inv(jacobian.T @ jacobian) * max(float(normalised @ normalised) / dof, 1.0)
     except np.linalg.LinAlgError:
         return None
     return params, covariance, kept
+
+
+def _weighed_fit(t: np.ndarray, angles: np.ndarray, lengths: np.ndarray, start: np.ndarray,
+                 loss: str) -> tuple[np.ndarray, list[float]]:
+    """The stretched turn fitted with each kind weighed by its robust scatter about the last fit
+    (three times), by ``loss``: the parameters and the two scatters."""
+    from scipy.optimize import least_squares  # imported here: it weighs on every run's start otherwise
+
+    params = start
+    angle_misfit, length_misfit = _misfits(params, t, angles, lengths)
+    for _ in range(3):
+        scales = [max(_robust_scale(angle_misfit), 1e-6), max(_robust_scale(length_misfit), 1e-3)]
+
+        def residuals(values: np.ndarray, scales: list[float] = scales) -> np.ndarray:
+            misfit = _misfits(values, t, angles, lengths)
+            return np.r_[misfit[0] / scales[0], misfit[1] / scales[1]]
+
+        params = least_squares(residuals, params, loss=loss, f_scale=1.0).x
+        angle_misfit, length_misfit = _misfits(params, t, angles, lengths)
+    return params, scales
+
+
+def _jacobian(params: np.ndarray, t: np.ndarray, angles: np.ndarray, lengths: np.ndarray,
+              scales: list[float]) -> np.ndarray:
+    """The normalised misfits' derivatives by the parameters (central differences)."""
+    columns = []
+    for i in range(len(params)):
+        step = np.zeros(len(params))
+        step[i] = 1e-6 * max(1.0, abs(float(params[i])))
+        plus, minus = _misfits(params + step, t, angles, lengths), _misfits(params - step, t, angles, lengths)
+        columns.append(np.r_[(plus[0] - minus[0]) / scales[0], (plus[1] - minus[1]) / scales[1]] / (2 * step[i]))
+    return np.stack(columns, axis=1)
 
 
 def _misfits(params: np.ndarray, t: np.ndarray, angles: np.ndarray,
