@@ -157,7 +157,8 @@ def turn_in_parts() -> list[Case]:
             for first in range(0, len(times_s) - count + 1, PART_EVERY):
                 found.append(Case(f"epfl_cars/{folder.name} photographs {first}-{first + count - 1}", folder,
                                   truth["omega_rad_s"], math.inf, truth["direction"],
-                                  start_s=max(0.0, float(times_s[first]) - 0.05), end_s=float(times_s[first + count - 1]) + 0.05))
+                                  start_s=max(0.0, float(times_s[first]) - 0.05),
+                                  end_s=float(times_s[first + count - 1]) + 0.05))
     return found
 
 
