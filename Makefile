@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: bench-symmetry bench-turning docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
+.PHONY: bench-symmetry bench-turning bench-clock docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -60,6 +60,10 @@ bench-real: $(STAMP)
 ## bench-variants: the real videos mirrored, turned, shrunk, thinned, reversed, noisy and cropped (written once to bench_out/variants): rate, interval and sense of turning, default settings (about a minute)
 bench-variants: $(STAMP)
 	$(BIN)/python benchmarks/bench_variants.py
+
+## bench-clock: clocks under a turn (a second hand sweeping or stepping, the face tilted, a camera rolling and wobbling), default settings (renders cached in bench_out/clock)
+bench-clock: $(STAMP)
+	$(BIN)/python benchmarks/bench_clock.py
 
 ## bench-accuracy: the paper's method vs ours on 17 rendered conditions with known rates, no lens given (renders cached)
 bench-accuracy: $(STAMP)
