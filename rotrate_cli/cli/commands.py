@@ -39,7 +39,8 @@ from rotrate_cli.runtime.choices import PROJECTIONS, SHAPES
 
 @app.command("check")
 def check_command(
-    manifest: Annotated[Path, typer.Argument(help="CSV: file, expected_omega, tolerance_pct, and optional "
+    manifest: Annotated[Path, typer.Argument(metavar="MANIFEST",
+                                             help="CSV: file, expected_omega, tolerance_pct, and optional "
                                                   "per-row fixation, fov, focal_px, fps, axis_angle, every, "
                                                   "method, start, end.")],
     junit: Annotated[Path | None, typer.Option("--junit", metavar="PATH",
@@ -84,7 +85,7 @@ def check_command(
 
 @app.command("frame")
 def frame_command(
-    video: Annotated[str, typer.Argument(help="Video file, image folder, or printf pattern.")],
+    video: Annotated[str, typer.Argument(metavar="VIDEO", help="Video file, image folder, or printf pattern.")],
     output: Annotated[Path, typer.Option("--output", "-o", metavar="PATH", help="The still to write (.png).")],
     at: Annotated[float, typer.Option("--at", metavar="SECONDS", help="Time of the frame, s.")] = 0.0,
     fps: Annotated[float | None, typer.Option("--fps", metavar="FPS",
@@ -138,7 +139,8 @@ def frame_command(
 
 @app.command("omega")
 def omega_command(
-    tracks: Annotated[Path, typer.Argument(help="Tracks CSV: track (or feature), frame, optional time_s, position.")],
+    tracks: Annotated[Path, typer.Argument(
+        metavar="TRACKS", help="Tracks CSV: track (or feature), frame, optional time_s, position.")],
     fixation: Annotated[float, typer.Option("--fixation", metavar="POSITION",
                                             help="The axis's position along the position column, in its "
                                                  "units (one number).")],
@@ -175,7 +177,8 @@ def omega_command(
 
 @app.command("synth")
 def synth_command(
-    output: Annotated[Path, typer.Argument(help="Video to write (.mp4); the truth goes beside it as .json.")],
+    output: Annotated[Path, typer.Argument(metavar="OUTPUT",
+                                           help="Video to write (.mp4); the truth goes beside it as .json.")],
     shape: Annotated[str, typer.Option("--shape", metavar="NAME", help=f"One of {', '.join(SHAPES)}.")] = "box",
     omega: Annotated[
         float, typer.Option("--omega", metavar="RAD_S", help="Rate in rad/s; negative turns clockwise seen from above.")
