@@ -212,3 +212,29 @@ def test_a_rolling_camera_is_found_where_a_turning_disc_holds_most_of_the_tracks
     _, shake = found
     assert shake.smooth and shake.background_tracks >= 12
     assert shake.turn_deg_s == pytest.approx(2.0, rel=0.02)
+
+
+def test_a_camera_that_rolls_and_wobbles_is_found_where_little_else_moves() -> None:
+    """A clock filmed by a camera rolling 3 degrees a second and wobbling 12 px: still points all
+    over the picture, but its stepping hand leaves few tracks that move. The picture does not turn
+    about one point, as a body's points turning together do: the camera's. A body filling the
+    picture, turning unevenly about its axis, is not taken for it."""
+    frames = 120
+    time_s = np.arange(frames) / 30.0
+    turn = np.radians(-3.0 * time_s + 1.5 * np.sin(2 * np.pi * 0.7 * time_s))
+    shift = np.stack([12 * np.sin(2 * np.pi * 0.4 * time_s + 1), 9 * np.sin(2 * np.pi * 0.55 * time_s)], axis=1)
+    tracks, _ = _tracks(frames, shift, turn, body=3)  # three tracks move: too few to tell it so
+    found = find_shake(tracks, frames, size_px=(640, 360))
+    assert found is not None and found[1].smooth
+    assert found[1].turned_deg == pytest.approx(-np.degrees(turn[-1]), abs=0.1)
+    # a body filling the picture, turning unevenly about its own axis, as one picture
+    rng = np.random.default_rng(4)
+    radius, phase = rng.uniform(20, 400, 80), rng.uniform(0, 2 * math.pi, 80)
+    rows = []
+    for k in range(60):
+        angle = phase + (0.2 + 0.1 * math.sin(k / 10)) * k / 30.0
+        x, y = 320 + radius * np.cos(angle) + rng.normal(0, 0.3, 80), 180 + radius * np.sin(angle)
+        rows += [(k, k / 30.0, t, x[t], y[t]) for t in range(80) if 0 <= x[t] < 640 and 0 <= y[t] < 360]
+    body = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
+    assert find_shake(body.sort_values(["track", "frame"], kind="stable").reset_index(drop=True), 60,
+                      size_px=(640, 360)) is None

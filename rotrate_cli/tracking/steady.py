@@ -63,6 +63,11 @@ BROAD = 0.5
 #: wheel: 9, its thin spokes hold few long tracks).
 MIN_MOVING = 5
 MOVING_PX = 5.0
+#: ... or its shifts lie this far (rms, tracking pixels) from a turn about one point: a body turning
+#: as one picture turns about its axis, a hand's wobble shifts the picture as it turns (a clock
+#: filmed rolling 3 degrees a second with a 12-px wobble: 11.5 px; a body filling the picture,
+#: turning unevenly about its axis: 0.06).
+OFF_ONE_POINT_PX = 2.0
 #: A camera that turned less than this over the clip (degrees), and shook less than
 #: :data:`SHAKE_PX`, is still.
 ROLL_DEG = 0.3
@@ -219,7 +224,23 @@ def _camera_s(tracks: pd.DataFrame, path: CameraPath, still_ids: np.ndarray, siz
         return False
     spread = _spread(track, x, y)
     moving = (~still) & (counts >= MIN_FRAMES) & (spread > MOVING_PX * pixel_px)
-    return int(moving.sum()) >= MIN_MOVING
+    # or the picture does not turn about one point: a body's turn, its points one picture, does
+    # (the top of a cylinder); a camera that wobbles in the hand shifts it too (a clock filmed so,
+    # its stepping hand's tracks still between steps: four moved)
+    return int(moving.sum()) >= MIN_MOVING or _off_one_point(path) > OFF_ONE_POINT_PX * pixel_px
+
+
+def _off_one_point(path: CameraPath) -> float:
+    """How far (rms, px) the path's shifts lie from those of a turn about one fixed point
+    (``shift_k = (I - R_k) c``, ``c`` fitted)."""
+    cos, sin = np.cos(path.angle_rad), np.sin(path.angle_rad)
+    design = np.zeros((2 * len(cos), 2))
+    design[0::2, 0], design[0::2, 1] = 1.0 - cos, sin
+    design[1::2, 0], design[1::2, 1] = -sin, 1.0 - cos
+    shifts = path.shift_px.reshape(-1)
+    point = np.linalg.lstsq(design, shifts, rcond=None)[0]
+    misfit = (shifts - design @ point).reshape(-1, 2)
+    return float(np.sqrt(np.mean(np.sum(misfit ** 2, axis=1))))
 
 
 @dataclass(frozen=True)
