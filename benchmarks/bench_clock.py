@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import math
 import sys
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,7 +25,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.scoring import SCORE_HEADER, finish, only_option, score_columns, scored  # noqa: E402
+from benchmarks.scoring import SCORE_HEADER, finish, only_option, within_case  # noqa: E402
 
 OUT = ROOT / "bench_out" / "clock"
 WALL = ROOT.parent / "shared" / "data" / "real_videos" / "bicycle_wheel_frontal.mp4"
@@ -138,16 +137,11 @@ def main() -> int:
             partial = path.with_suffix(".partial.mp4")
             write_clock(clock, partial)
             partial.replace(path)
-        truth = {"omega_rad_s": math.radians(clock.hand_deg_s), "direction": "n/a"}
-        started = time.perf_counter()
-        row = scored(path, truth)
         rows += 1
-        error = abs(float(row["error_pct"])) / 100 if math.isfinite(float(row["error_pct"])) else math.inf
-        within += error <= WITHIN
-        print(f"{name:<22} {truth['omega_rad_s']:>8.4f} {float(row['omega']):>8.4f} {score_columns(row)}  "
-              f"{time.perf_counter() - started:.1f} s")
-        if row["quality"] == "good" and (error > WITHIN or not row["covers"]):
-            misses.append(f"{name}: {float(row['error_pct']):+.2f}%, covers {row['covers']}, good")
+        near, miss = within_case(name, path, {"omega_rad_s": math.radians(clock.hand_deg_s), "direction": "n/a"},
+                                 WITHIN, width=22)
+        within += near
+        misses += [miss] if miss else []
     return finish(f"cases {rows}; within {WITHIN:.0%}: {within}; good but off or its interval missing: {len(misses)}",
                   misses)
 

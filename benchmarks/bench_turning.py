@@ -16,14 +16,13 @@ from __future__ import annotations
 
 import math
 import sys
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.scoring import SCORE_HEADER, finish, only_option, score_columns, scored  # noqa: E402
+from benchmarks.scoring import SCORE_HEADER, finish, only_option, within_case  # noqa: E402
 from rotrate_cli.video.rotor import RotorScene, rotor_truth, write_rotor_clip  # noqa: E402
 
 OUT = ROOT / "bench_out" / "turning"
@@ -70,15 +69,10 @@ def main() -> int:
         record = rotor_truth(case.rotor)
         if not path.exists():
             write_rotor_clip(case.rotor, path)
-        started = time.perf_counter()
-        row = scored(path, record)
         rows += 1
-        error = abs(float(row["error_pct"])) / 100 if math.isfinite(float(row["error_pct"])) else math.inf
-        within += error <= WITHIN
-        print(f"{case.name:<24} {float(record['omega_rad_s']):>8.4f} {float(row['omega']):>8.4f} "
-              f"{score_columns(row)}  {time.perf_counter() - started:.1f} s")
-        if row["quality"] == "good" and (error > WITHIN or not row["covers"]):
-            misses.append(f"{case.name}: {float(row['error_pct']):+.2f}%, covers {row['covers']}, good")
+        near, miss = within_case(case.name, path, record, WITHIN)
+        within += near
+        misses += [miss] if miss else []
     return finish(f"cases {rows}; within {WITHIN:.1%}: {within}; good but off or its interval missing: {len(misses)}",
                   misses)
 

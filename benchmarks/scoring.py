@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import time
 from pathlib import Path
 
 from rotrate_cli.analysis import AnalysisConfig, analyze
@@ -83,6 +84,21 @@ def summary(rows: list[dict[str, object]]) -> tuple[str, bool]:
             f"good {len(good)} (covering {sum(bool(r['covers']) for r in good)}); off by more than "
             f"{100 * UNMARKED_LIMIT:.0f}% and not marked weak {unmarked}; sense wrong {wrong}")
     return line, unmarked == 0 and wrong == 0 and covered == len(rows)
+
+
+def within_case(name: str, path: Path, truth: dict, within: float, width: int = 24) -> tuple[bool, str | None]:
+    """Score one rendered case (:func:`scored`) and print its line (the name, the truth, the rate
+    and :data:`SCORE_HEADER`'s columns, and the time taken): whether it lies within ``within`` (a
+    fraction) of the truth, and a line for :func:`finish` where it is good but off or its interval
+    misses."""
+    started = time.perf_counter()
+    row = scored(path, truth)
+    error = abs(float(row["error_pct"])) / 100 if math.isfinite(float(row["error_pct"])) else math.inf
+    print(f"{name:<{width}} {float(truth['omega_rad_s']):>8.4f} {float(row['omega']):>8.4f} {score_columns(row)}  "
+          f"{time.perf_counter() - started:.1f} s")
+    missed = row["quality"] == "good" and (error > within or not row["covers"])
+    miss = f"{name}: {float(row['error_pct']):+.2f}%, covers {row['covers']}, good"
+    return error <= within, miss if missed else None
 
 
 def finish(summary: str, misses: list[str]) -> int:
