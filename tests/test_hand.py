@@ -14,7 +14,7 @@ from rotrate_cli.scene.hand import measure_hand, window_rates
 from rotrate_cli.scene.picture_angle import AngleFrames
 from rotrate_cli.video.frames import Frame
 
-FPS = 30.0
+FPS = 15.0
 SIZE = 480
 CENTRE = (250.0, 230.0)
 RADIUS = 170.0
