@@ -21,7 +21,7 @@ from rotrate_cli.errors import InputError, NoResultError
 from rotrate_cli.fitting.camera import Camera
 from rotrate_cli.fitting.outliers import FEATURE_COLUMNS, Combined, RejectionConfig
 from rotrate_cli.fitting.segment import Body
-from rotrate_cli.fitting.series import rate_series
+from rotrate_cli.fitting.series import rate_series, window_centres
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.runtime.pools import pipeline_threads
@@ -416,8 +416,16 @@ def _repetition_only(footage: Footage, period: Period | None, config: AnalysisCo
             "`tracker_kind='auto'` follows those") if config.tracker_kind == "csrt" else ""
     source = "the clip's repetition" if period is not None else "the picture's turning"
     note = f"no track gave a rate: the rate is {source} alone, and the sense of turning is unknown{hint}"
+    # omega(t)'s windows, with no track's rate in them: the picture's turning rates each it can
+    # (the return's windows are not sought again here: weak where the turning does not rate them)
+    series = None
+    kept_frames = footage.pairs.angle_frames.frames
+    if config.window_s is not None and kept_frames:
+        centres = window_centres(kept_frames[0][1], kept_frames[-1][1], config.window_s)
+        series = pd.DataFrame({"time_s": centres, "omega_rad_s": math.nan, "omega_low_rad_s": math.nan,
+                               "omega_high_rad_s": math.nan, "tracks_used": 0})
     return _result(footage, config, geometry, Checked(empty), period, view_tracks, notes=(note,),
-                   method=config.method, focal=None, camera=None, series=None, tracks=kept)
+                   method=config.method, focal=None, camera=None, series=series, tracks=kept)
 
 
 def _segmented(footage: Footage, config: AnalysisConfig) -> Analysis:

@@ -140,9 +140,13 @@ def test_a_ticking_clock_clip_is_rated_by_its_hand(tmp_path) -> None:
     for frame in _clock(16.0, ticking=True):
         writer.write(cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR))
     writer.release()
-    result = analyze(path, AnalysisConfig(fixation_px=None))
+    result = analyze(path, AnalysisConfig(fixation_px=None, window_s=8.0))
     truth = math.radians(6.0)
     assert result.rate_from == "turning" and result.verdict is not None and result.verdict.thin_part
     assert result.omega_rad_s == pytest.approx(truth, rel=0.02)
     assert result.omega_low_rad_s <= truth <= result.omega_high_rad_s
     assert math.dist(result.fixation_px, CENTRE) < 2.0
+    # omega(t), no track standing behind it: each window rated by the hand, holding the truth
+    series = result.series
+    assert series is not None and len(series) >= 3 and set(series["rate_from"]) == {"turning"}
+    assert ((series["omega_low_rad_s"] <= truth) & (truth <= series["omega_high_rad_s"])).all()

@@ -30,6 +30,19 @@ def default_step_s(window_s: float) -> float:
     return 1.0 / max(1, math.ceil(8.0 / window_s)) if window_s <= 8 else 1.0
 
 
+def window_centres(first_s: float, last_s: float, window_s: float, step_s: float | None = None) -> list[float]:
+    """The windows' centres: multiples of ``step_s`` (:func:`default_step_s` where None) whose
+    window lies within ``first_s``-``last_s``."""
+    step = default_step_s(window_s) if step_s is None else step_s
+    half = window_s / 2.0
+    centres = []
+    index = math.ceil((first_s + half) / step - 1e-9)
+    while index * step + half <= last_s + 1e-9:
+        centres.append(index * step)
+        index += 1
+    return centres
+
+
 #: Passes over the windows: the first with a constant rate in each, the next with the change of
 #: rate the first found (see :func:`_warp`).
 _PASSES = 3
@@ -77,17 +90,11 @@ def rate_series(
     """One row per window centre (multiples of ``step_s`` whose window lies inside the clip):
     ``time_s, omega_rad_s, omega_low_rad_s, omega_high_rad_s, tracks_used`` (NaN where the
     window gave no rate). ``estimate`` turns a table of offsets into a combined rate."""
-    step = default_step_s(window_s) if step_s is None else step_s
     times = offsets["time_s"].to_numpy()
     rows: list[tuple] = []
     if len(times):
-        first, last = float(times.min()), float(times.max())
         half = window_s / 2.0
-        centres = []
-        index = math.ceil((first + half) / step - 1e-9)
-        while index * step + half <= last + 1e-9:
-            centres.append(index * step)
-            index += 1
+        centres = window_centres(float(times.min()), float(times.max()), window_s, step_s)
         slopes = np.zeros(len(centres))
         for _ in range(_PASSES):
             rows = []
