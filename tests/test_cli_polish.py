@@ -84,6 +84,14 @@ def test_help_says_what_each_command_has() -> None:
     assert version.exit_code == 0 and version.stdout.startswith("rotrate ")
 
 
+@pytest.mark.parametrize(("command", "usage"), [
+    ("analyze", "[OPTIONS] VIDEO..."), ("check", "[OPTIONS] MANIFEST"), ("frame", "[OPTIONS] VIDEO"),
+    ("omega", "[OPTIONS] TRACKS"), ("synth", "[OPTIONS] OUTPUT")])
+def test_usage_lines_name_arguments_as_other_tools_do(command: str, usage: str) -> None:
+    line = next(line for line in runner.invoke(app, [command, "--help"]).stdout.splitlines() if "Usage:" in line)
+    assert line.split("Usage: ")[1].strip() == f"rotrate {command} {usage}"  # not Typer's {VIDEO}...
+
+
 def test_the_papers_method_takes_the_papers_spacing() -> None:
     """At --every 1 the paper's second differences are noise (1.463 for 0.6); by default the
     spacing is about a sixth of a radian, as the paper's 16 frames at 30 fps."""

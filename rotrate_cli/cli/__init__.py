@@ -51,7 +51,20 @@ class _Group(_HelpFlag, TyperGroup):
 
 
 class _Command(_HelpFlag, TyperCommand):
-    pass
+    def collect_usage_pieces(self, ctx: typer.Context) -> list[str]:
+        """The usage line as most command-line tools write it: ``VIDEO...``, ``[OPTIONS]``.
+
+        Typer marks a required argument with braces (``{VIDEO}...``), which reads as a literal.
+        """
+        pieces = [self.options_metavar] if self.options_metavar else []
+        for param in self.get_params(ctx):
+            if param.param_type_name != "argument":
+                pieces.extend(param.get_usage_pieces(ctx))
+                continue
+            name = str(param.display_name_raw)
+            name = name if param.required else f"[{name}]"
+            pieces.append(name + ("..." if param.nargs != 1 else ""))
+        return pieces
 
 
 class _Typer(typer.Typer):
