@@ -238,3 +238,61 @@ def test_a_camera_that_rolls_and_wobbles_is_found_where_little_else_moves() -> N
     body = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
     assert find_shake(body.sort_values(["track", "frame"], kind="stable").reset_index(drop=True), 60,
                       size_px=(640, 360)) is None
+
+
+def test_a_camera_that_comes_nearer_and_goes_back_is_taken_out_with_its_zoom() -> None:
+    """A hand-held camera rolling 2 degrees a second, shifting 10 px and coming 4% nearer and back:
+    no turn and shift leaves its background within a pixel (the edges move 13 px more), so the
+    rate was the tracks', 7 times the truth. A turn, zoom and shift does: every background point
+    comes back to where the first frame saw it, and the roll is the camera's."""
+    frames = 150
+    time_s = np.arange(frames) / 30.0
+    turn = np.radians(-2.0 * time_s)
+    zoom = 1.0 + 0.04 * np.sin(2 * np.pi * 0.1 * time_s + 1.0)
+    shift = np.stack([10 * np.sin(2 * np.pi * 0.5 * time_s), 10 * np.sin(2 * np.pi * 0.37 * time_s + 2)], axis=1)
+    rng = np.random.default_rng(7)
+    still = rng.uniform([0, 0], [640, 360], (60, 2))
+    middle = np.array([320.0, 180.0])
+    rows = []
+    for k in range(frames):
+        c, s = math.cos(turn[k]), math.sin(turn[k])
+        seen = zoom[k] * (still - middle) @ np.array([[c, -s], [s, c]]).T + middle + shift[k]
+        rows += [(k, time_s[k], track, x, y) for track, (x, y) in enumerate(seen)]
+        hand = middle + 100 * np.array([math.sin(0.1 * (k // 30)), -math.cos(0.1 * (k // 30))])
+        rows.append((k, time_s[k], 60, *(zoom[k] * (hand - middle) @ np.array([[c, -s], [s, c]]).T + middle
+                                          + shift[k])))
+    tracks = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
+    tracks = tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True)
+    found = find_shake(tracks, frames, size_px=(640, 360))
+    assert found is not None
+    path, shake = found
+    assert path.warp is not None and shake.background_tracks == 60
+    assert shake.turn_deg_s == pytest.approx(2.0, rel=0.02)  # anticlockwise as the picture shows it (y down)
+    background = tracks[tracks["track"] < 60]
+    x, y = path.undo(background["frame"].to_numpy(), background["x_px"].to_numpy(), background["y_px"].to_numpy())
+    seen_first = zoom[0] * (still - middle) + middle + shift[0]  # the first frame: no turn yet
+    truth = seen_first[background["track"].to_numpy()]
+    assert np.allclose(x, truth[:, 0], atol=0.05) and np.allclose(y, truth[:, 1], atol=0.05)
+    # the views carry a picture as they carry its points
+    image = np.zeros((90, 160), np.float32)
+    image[40:50, 70:90] = 1.0
+    carried = path.carry(image, 0, 100, 0.25)
+    row, col = np.argwhere(carried > 0.5).mean(axis=0)
+    ex, ey = path.redo(np.array([100]), *path.undo(np.array([0]), np.array([79.5 / 0.25]), np.array([44.5 / 0.25])))
+    assert col == pytest.approx(ex[0] * 0.25, abs=0.5) and row == pytest.approx(ey[0] * 0.25, abs=0.5)
+
+
+def test_a_patch_that_zooms_about_one_point_is_not_taken_for_the_camera() -> None:
+    """Points in one patch that grow about one point as they turn (a body coming nearer as it
+    turns, seen face on) give a smooth path about one point, in one patch: not the camera's."""
+    frames, rows = 120, []
+    rng = np.random.default_rng(8)
+    points = rng.uniform([250, 120], [390, 240], (50, 2))
+    for k in range(frames):
+        a, zoom = 0.4 * k / 30.0, 1.0 + 0.003 * k
+        c, s = math.cos(a), math.sin(a)
+        seen = zoom * (points - [320.0, 180.0]) @ np.array([[c, -s], [s, c]]).T + [320.0, 180.0]
+        rows += [(k, k / 30.0, track, x, y) for track, (x, y) in enumerate(seen)]
+    tracks = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
+    assert find_shake(tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True), frames,
+                      size_px=(640, 360)) is None

@@ -504,9 +504,7 @@ class CornerTracker:
         levels: 255 there, 0 elsewhere."""
         image, _, reference_frame = reference
         if self.camera is not None:  # the reference as the camera stands now: the background still
-            matrix = self.camera.between(reference_frame, frame_index, self.scale)
-            image = cv2.warpAffine(image, matrix, (image.shape[1], image.shape[0]), flags=cv2.INTER_LINEAR,
-                                   borderMode=cv2.BORDER_REPLICATE)
+            image = self.camera.carry(image, reference_frame, frame_index, self.scale)
         # on whole grey levels, "over the threshold" is over its whole part, as OpenCV takes it
         return cv2.threshold(cv2.absdiff(smoothed, image), self.config.motion_threshold, 255, cv2.THRESH_BINARY)[1]
 
