@@ -1,6 +1,7 @@
 """Clocks rendered under a turn: a second hand sweeping or stepping once a second over a third of a
 turn (20 s), its minute hand creeping, the face seen face on or tilted, filmed by a camera that
-stands still or rolls and wobbles in the hand; measured with default settings (``--fixation
+stands still, or rolls and wobbles, or is held in the hand (it also leans, comes nearer and goes
+back, and its exposure follows the light); measured with default settings (``--fixation
 auto``). The hand is two pixels wide: its tracks slide along it, and a hand that steps changes no
 pixel between most frames, so the rate is the picture's turning (:mod:`rotrate_cli.scene.hand`).
 
@@ -39,7 +40,10 @@ SIZE = (640, 480)
 class Clock:
     """A clock clip: the second hand's rate (degrees a second, clockwise), whether it steps each
     second, the face's tilt (degrees, about a line 30 degrees from x), the camera's roll (degrees a
-    second) and a hand's wobble (1.5 degrees and 12 px), the face's radius, the clip's length."""
+    second) and a hand's wobble (1.5 degrees and 12 px), the face's radius, the clip's length; and
+    a camera held in the hand: how far it leans to and fro (degrees, about both axes, its focal
+    length 700 px), how much nearer it comes and goes back (a fraction), and how far its exposure
+    follows the light (a fraction)."""
 
     hand_deg_s: float = 6.0
     ticking: bool = False
@@ -48,6 +52,9 @@ class Clock:
     wobble: bool = False
     radius_px: int = 150
     seconds: float = 20.0
+    lean_deg: float = 0.0
+    zoom: float = 0.0
+    exposure: float = 0.0
 
 
 CASES = {
@@ -60,6 +67,8 @@ CASES = {
     "roll3-wobble-tick": Clock(roll_deg_s=3.0, wobble=True, ticking=True),
     "roll-2-small-tick": Clock(roll_deg_s=-2.0, ticking=True, radius_px=70),
     "roll3-wobble-tilt35": Clock(roll_deg_s=3.0, wobble=True, tilt_deg=35.0),
+    "in-hand-tick": Clock(roll_deg_s=2.0, wobble=True, ticking=True, lean_deg=2.0, zoom=0.04, exposure=0.08),
+    "in-hand-tilt40": Clock(roll_deg_s=-2.0, wobble=True, tilt_deg=40.0, lean_deg=1.5, zoom=0.03, exposure=0.05),
 }
 
 
@@ -82,6 +91,19 @@ def _hand(image: np.ndarray, centre: tuple[int, int], clock_deg: float, length: 
     tail = (int(s * (cx - 0.15 * length * math.sin(a))), int(s * (cy + 0.15 * length * math.cos(a))))
     tip = (int(s * (cx + length * math.sin(a))), int(s * (cy - length * math.cos(a))))
     cv2.line(image, tail, tip, colour, width, cv2.LINE_AA, shift=4)
+
+
+def _in_hand(clock: Clock, time_s: float) -> np.ndarray:
+    """The view (3x3, on the picture) of a camera that leans to and fro about its centre and comes
+    nearer and goes back (:attr:`Clock.lean_deg`, :attr:`Clock.zoom`); none where it does neither."""
+    width, height = SIZE
+    lean = np.radians([clock.lean_deg * math.sin(2 * math.pi * 0.45 * time_s + 2.0),
+                       clock.lean_deg * math.sin(2 * math.pi * 0.3 * time_s + 0.7), 0.0])
+    turn, _ = cv2.Rodrigues(lean)
+    focal = 700.0 * (1.0 + clock.zoom * math.sin(2 * math.pi * 0.1 * time_s + 1.3))
+    inner = np.array([[700.0, 0.0, width / 2], [0.0, 700.0, height / 2], [0.0, 0.0, 1.0]])
+    outer = np.array([[focal, 0.0, width / 2], [0.0, focal, height / 2], [0.0, 0.0, 1.0]])
+    return outer @ turn @ np.linalg.inv(inner)
 
 
 def write_clock(clock: Clock, path: Path) -> None:
@@ -119,8 +141,13 @@ def write_clock(clock: Clock, path: Path) -> None:
         camera = cv2.getRotationMatrix2D((cx + 40, cy - 30), roll, 1.0)
         camera[0, 2] += dx - width / 2 - 20
         camera[1, 2] += dy - height / 2 + 10
-        frame = cv2.warpAffine(image, camera, SIZE, flags=cv2.INTER_LINEAR)
-        writer.write(np.clip(frame + rng.normal(0.0, 2.0, frame.shape), 0, 255).astype(np.uint8))
+        if clock.lean_deg or clock.zoom:
+            view = _in_hand(clock, time_s) @ np.vstack([camera, [0.0, 0.0, 1.0]])
+            frame = cv2.warpPerspective(image, view, SIZE, flags=cv2.INTER_LINEAR)
+        else:
+            frame = cv2.warpAffine(image, camera, SIZE, flags=cv2.INTER_LINEAR)
+        light = 1.0 + clock.exposure * math.sin(2 * math.pi * 0.2 * time_s + 0.5)
+        writer.write(np.clip(light * frame + rng.normal(0.0, 2.0, frame.shape), 0, 255).astype(np.uint8))
     writer.release()
 
 
