@@ -42,8 +42,9 @@ class Clock:
     second, the face's tilt (degrees, about a line 30 degrees from x), the camera's roll (degrees a
     second) and a hand's wobble (1.5 degrees and 12 px), the face's radius, the clip's length; and
     a camera held in the hand: how far it leans to and fro (degrees, about both axes, its focal
-    length 700 px), how much nearer it comes and goes back (a fraction), and how far its exposure
-    follows the light (a fraction)."""
+    length 700 px), how much nearer it comes and goes back (a fraction), how far its exposure
+    follows the light (a fraction), and its tremor (px rms a frame, and a seventh as many degrees
+    of roll)."""
 
     hand_deg_s: float = 6.0
     ticking: bool = False
@@ -55,6 +56,7 @@ class Clock:
     lean_deg: float = 0.0
     zoom: float = 0.0
     exposure: float = 0.0
+    tremor_px: float = 0.0
 
 
 CASES = {
@@ -69,6 +71,8 @@ CASES = {
     "roll3-wobble-tilt35": Clock(roll_deg_s=3.0, wobble=True, tilt_deg=35.0),
     "in-hand-tick": Clock(roll_deg_s=2.0, wobble=True, ticking=True, lean_deg=2.0, zoom=0.04, exposure=0.08),
     "in-hand-tilt40": Clock(roll_deg_s=-2.0, wobble=True, tilt_deg=40.0, lean_deg=1.5, zoom=0.03, exposure=0.05),
+    "in-hand-tremor-10s": Clock(roll_deg_s=-4.0, wobble=True, seconds=10.0, lean_deg=2.0, zoom=0.04,
+                                exposure=0.08, tremor_px=2.0),
 }
 
 
@@ -124,6 +128,7 @@ def write_clock(clock: Clock, path: Path) -> None:
     squash = turn @ np.diag([1.0, math.cos(math.radians(clock.tilt_deg))]) @ turn.T
     tilt = np.hstack([squash, (np.array([cx, cy]) - squash @ np.array([cx, cy]))[:, None]])
     rng = np.random.default_rng(2)
+    tremor = np.random.default_rng(9)
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), FPS, SIZE)
     for index in range(int(clock.seconds * FPS)):
         time_s = index / FPS
@@ -135,9 +140,13 @@ def write_clock(clock: Clock, path: Path) -> None:
         if clock.tilt_deg:
             image = cv2.warpAffine(image, tilt, (2 * width, 2 * height), flags=cv2.INTER_LINEAR)
         roll, dx, dy = clock.roll_deg_s * time_s, 0.0, 0.0
+        if clock.tremor_px:
+            jolt = tremor.normal(0.0, clock.tremor_px, 3)
+            roll, dx, dy = roll + jolt[0] / 7.0, jolt[1], jolt[2]
         if clock.wobble:
             roll += 1.5 * math.sin(2 * math.pi * 0.7 * time_s)
-            dx, dy = 12 * math.sin(2 * math.pi * 0.4 * time_s + 1), 9 * math.sin(2 * math.pi * 0.55 * time_s)
+            dx += 12 * math.sin(2 * math.pi * 0.4 * time_s + 1)
+            dy += 9 * math.sin(2 * math.pi * 0.55 * time_s)
         camera = cv2.getRotationMatrix2D((cx + 40, cy - 30), roll, 1.0)
         camera[0, 2] += dx - width / 2 - 20
         camera[1, 2] += dy - height / 2 + 10
