@@ -69,6 +69,7 @@ CASES = {
     "roll3-wobble-tick": Clock(roll_deg_s=3.0, wobble=True, ticking=True),
     "roll-2-small-tick": Clock(roll_deg_s=-2.0, ticking=True, radius_px=70),
     "roll3-wobble-tilt35": Clock(roll_deg_s=3.0, wobble=True, tilt_deg=35.0),
+    "wobble-tilt35": Clock(wobble=True, tilt_deg=35.0),
     "in-hand-tick": Clock(roll_deg_s=2.0, wobble=True, ticking=True, lean_deg=2.0, zoom=0.04, exposure=0.08),
     "in-hand-tilt40": Clock(roll_deg_s=-2.0, wobble=True, tilt_deg=40.0, lean_deg=1.5, zoom=0.03, exposure=0.05),
     "in-hand-tremor-10s": Clock(roll_deg_s=-4.0, wobble=True, seconds=10.0, lean_deg=2.0, zoom=0.04,

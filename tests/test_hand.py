@@ -175,3 +175,21 @@ def test_a_steadied_camera_that_leaned_and_followed_the_light_is_lined_up_again(
     assert reading is not None
     assert reading.omega_rad_s == pytest.approx(truth, rel=0.01)
     assert reading.omega_low_rad_s <= truth <= reading.omega_high_rad_s
+
+
+def test_lining_up_leaves_its_frames_as_they_were() -> None:
+    """OpenCV's phase correlation applies its window to its inputs in place where their size
+    needs no padding for the Fourier transform (320 x 240 does, 322 x 240 does not): the steadied
+    frames were read faded to their edges at some sizes and not at others. They are faded by
+    choice now, whatever their size, and the frames given are left as they were."""
+    from rotrate_cli.scene.hand import _lined_up
+
+    rng = np.random.default_rng(2)
+    for width in (320, 322):
+        base = cv2.GaussianBlur(rng.random((240, width)).astype(np.float32) * 255, (0, 0), 2.0)
+        images = np.stack([np.roll(base, k, axis=1) for k in range(4)])
+        given, still = images.copy(), base.copy()
+        lined = _lined_up(images, still)
+        assert np.array_equal(images, given) and np.array_equal(still, base)
+        # faded to the edges, the same way at either size
+        assert float(np.abs(lined[:, :, 0]).max()) < 1.0 and float(np.abs(lined[:, 120, width // 2]).min()) > 1.0

@@ -296,3 +296,30 @@ def test_a_patch_that_zooms_about_one_point_is_not_taken_for_the_camera() -> Non
     tracks = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
     assert find_shake(tracks.sort_values(["track", "frame"], kind="stable").reset_index(drop=True), frames,
                       size_px=(640, 360)) is None
+
+
+def test_a_path_a_little_off_one_point_needs_its_still_points_all_round() -> None:
+    """A smooth path whose still points lie in one patch is the camera's only where it is far from
+    a turn about one point: a box's top seen from above, turning in perspective, keeps within a few
+    pixels of one (it was taken for a rolling camera, and then no point could be tracked); a hand's
+    wobble and zoom do not."""
+    from rotrate_cli.tracking.steady import OFF_ONE_POINT_ALONE_PX, OFF_ONE_POINT_PX, CameraPath, _camera_s
+
+    frames = 90
+    angle = np.radians(np.linspace(0.0, 10.0, frames))
+    rng = np.random.default_rng(3)
+    patch = rng.uniform([200, 90], [440, 270], (30, 2))  # a part of the picture, not all of it
+    rows = [(k, k / 30.0, track, x, y) for k in range(frames) for track, (x, y) in enumerate(patch)]
+    tracks = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
+    about = np.array([320.0, 180.0])
+    between = 0.5 * (OFF_ONE_POINT_PX + OFF_ONE_POINT_ALONE_PX)
+    for off_px, camera in ((between, False), (2 * OFF_ONE_POINT_ALONE_PX, True)):
+        turn = np.stack([np.cos(angle), np.sin(angle)], axis=1)
+        shift = about - np.stack([turn[:, 0] * about[0] - turn[:, 1] * about[1],
+                                  turn[:, 1] * about[0] + turn[:, 0] * about[1]], axis=1)
+        shift[:, 0] += off_px * math.sqrt(2) * np.sin(np.linspace(0, 4 * math.pi, frames))  # off the one point
+        path = CameraPath(0, angle, shift)
+        assert _camera_s(tracks, path, np.arange(30), (640, 360), 1.0) is camera
+    # still points along one edge (a box's face nearing a wide lens) are no wall, however far off
+    edge = tracks.assign(x_px=300.0 + 0.05 * tracks["x_px"])
+    assert not _camera_s(edge, path, np.arange(30), (640, 360), 1.0)

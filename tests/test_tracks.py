@@ -49,3 +49,35 @@ def test_videos_are_followed_with_the_window_laid_along_the_rows_and_stills_as_g
     # Lucas-Kanade by name: on stills the default matches features (tracking/matched.py)
     tracks.read_footage(tmp_path, AnalysisConfig(fixation_px=(319.5, 179.5), fps=30.0, tracker_kind="klt"))
     assert chosen[0] is True and chosen[-1] is False
+
+
+def test_a_camera_that_wobbles_back_to_where_it_started_moves_the_rim() -> None:
+    """The picture's rim tells a camera that moves from a disc turning before a still background.
+    A camera that wobbled about where it started, and ended near it, moves the rim all through
+    the clip: it was judged by the first and last frames alone, taken for still, and a tilted
+    clock filmed so read +199%, weak, from a return of its swaying picture."""
+    import math
+
+    import numpy as np
+
+    from rotrate_cli.stages.period import Thumbnails
+    from rotrate_cli.video.frames import Frame
+
+    rng = np.random.default_rng(6)
+    wall = cv2.resize(rng.random((40, 50)).astype(np.float32), (400, 320), interpolation=cv2.INTER_CUBIC)
+    wall = (wall * 180 + 40).astype(np.uint8)
+
+    def rim_moves(shift_px) -> bool:
+        kept = Thumbnails()
+        frames = []
+        for k in range(120):
+            dx, dy = shift_px(k / 30.0)
+            frames.append(Frame(k, k / 30.0, cv2.warpAffine(wall, np.float32([[1, 0, dx - 40], [0, 1, dy - 40]]),
+                                                            (320, 240), flags=cv2.INTER_LINEAR)))
+        for _ in kept.tap(iter(frames)):
+            pass
+        return tracks._rim_moves(kept)
+
+    # 12 px to and fro, two whole sways in the 4 s: the last frame is the first's
+    assert rim_moves(lambda t: (12 * math.sin(math.pi * t), 9 * math.sin(math.pi * t)))
+    assert not rim_moves(lambda t: (0.0, 0.0))

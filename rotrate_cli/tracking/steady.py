@@ -80,6 +80,14 @@ MOVING_PX = 5.0
 #: filmed rolling 3 degrees a second with a 12-px wobble: 11.5 px; a body filling the picture,
 #: turning unevenly about its axis: 0.06).
 OFF_ONE_POINT_PX = 2.0
+#: ... or, its still points spanning this share of :data:`BROAD` (a strip of a bare wall), this
+#: far: a body's points in one patch, turning in perspective, keep within a few pixels of a turn
+#: about one point (a box's top seen from 30 degrees above: 3.5 px), a hand's wobble and zoom do
+#: not (clocks filmed in the hand: 11-34 px, their still points spanning 21-41% of the width); a
+#: body's face that nears a wide lens as it turns zooms far from one point too, but its still
+#: points lie along one edge (2% of the width).
+OFF_ONE_POINT_ALONE_PX = 8.0
+ALONE_SPAN = 0.2
 #: A camera that turned less than this over the clip (degrees), and shook less than
 #: :data:`SHAKE_PX`, is still.
 ROLL_DEG = 0.3
@@ -346,16 +354,15 @@ def _long_ids(track: np.ndarray, frames: int) -> np.ndarray:
 def _camera_s(tracks: pd.DataFrame, path: CameraPath, still_ids: np.ndarray, size_px: tuple[int, int] | None,
               pixel_px: float) -> bool:
     """True where a smooth ``path`` is the camera's (see the module's notes): the still tracks
-    ``still_ids`` lie all over the picture, and other tracks still move once it is taken out; or
-    the path does not turn the picture about one point, wherever the still tracks lie."""
+    ``still_ids`` lie all over the picture, and other tracks still move once it is taken out or
+    the path does not turn the picture about one point; or, the still tracks spanning part of the
+    picture, the path is far from a turn about one point (:data:`OFF_ONE_POINT_ALONE_PX`)."""
     if size_px is None:
         return False
     # a body's turn, its points one picture, turns it about one point (the top of a cylinder); a
     # camera held in the hand shifts and zooms it as it turns (a clock filmed so, its stepping
-    # hand's tracks still between steps: four moved; or its still tracks in one corner of the
-    # picture, the rest of the wall bare)
-    if _off_one_point(path) > OFF_ONE_POINT_PX * pixel_px:
-        return True
+    # hand's tracks still between steps: four moved)
+    off_px = _off_one_point(path)
     track = tracks["track"].to_numpy()
     x, y = path.undo(tracks["frame"].to_numpy(), tracks["x_px"].to_numpy(dtype=np.float64),
                      tracks["y_px"].to_numpy(dtype=np.float64))
@@ -363,11 +370,14 @@ def _camera_s(tracks: pd.DataFrame, path: CameraPath, still_ids: np.ndarray, siz
     mean_x, mean_y = np.bincount(inverse, x) / counts, np.bincount(inverse, y) / counts
     still = np.isin(ids, still_ids)
     width, height = size_px
-    if np.ptp(mean_x[still]) < BROAD * width or np.ptp(mean_y[still]) < BROAD * height:
+    span = min(np.ptp(mean_x[still]) / width, np.ptp(mean_y[still]) / height)
+    if span >= ALONE_SPAN * BROAD and off_px > OFF_ONE_POINT_ALONE_PX * pixel_px:
+        return True
+    if span < BROAD:
         return False
     spread = _spread(track, x, y)
     moving = (~still) & (counts >= MIN_FRAMES) & (spread > MOVING_PX * pixel_px)
-    return int(moving.sum()) >= MIN_MOVING
+    return int(moving.sum()) >= MIN_MOVING or off_px > OFF_ONE_POINT_PX * pixel_px
 
 
 def _off_one_point(path: CameraPath) -> float:
