@@ -225,8 +225,8 @@ def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0,
 
 
 def _zoomed(track: np.ndarray, frame: np.ndarray, x: np.ndarray, y: np.ndarray, steps: _Steps,
-                step_index: np.ndarray, seed: CameraPath, still_px: float,
-                size_px: tuple[int, int] | None) -> tuple[CameraPath, np.ndarray, np.ndarray] | None:
+            step_index: np.ndarray, seed: CameraPath, still_px: float,
+            size_px: tuple[int, int] | None) -> tuple[CameraPath, np.ndarray, np.ndarray] | None:
     """The camera's path as a turn, zoom and shift and the long tracks it leaves still, found in
     turn from the still half under ``seed`` (a turn and shift); None where fewer than
     :data:`MIN_BACKGROUND` stay still or it zooms beyond :data:`MAX_ZOOM`.
