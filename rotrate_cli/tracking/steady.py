@@ -38,6 +38,7 @@ A camera that also leans by a few degrees keystones the picture: that is not tak
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -165,16 +166,8 @@ def find_shake(tracks: pd.DataFrame, frames: int, pixel_px: float = 1.0,
 
     def settled(background: np.ndarray) -> tuple[CameraPath, np.ndarray, np.ndarray] | None:
         """The camera's path and the still tracks found in turn from a first guess of them."""
-        for _ in range(ROUNDS):
-            path = steps.rigid(background[step_index])
-            spread = _spread(sub_track, *path.undo(sub_frame, x, y))
-            updated = spread <= still_px
-            if updated.sum() < MIN_BACKGROUND:
-                return None
-            if (updated == background).all():
-                break
-            background = updated
-        return path, spread, background
+        return _in_turn(lambda still: steps.rigid(still[step_index]), background, sub_track, sub_frame, x, y,
+                        still_px, ROUNDS)
 
     # the still half after the median step (the background is most of the long tracks where there
     # is one); else the tracks that move least as they are: a body that fills most of the picture
@@ -240,11 +233,30 @@ def _zoomed(track: np.ndarray, frame: np.ndarray, x: np.ndarray, y: np.ndarray, 
         return None  # as for a smooth path: without the picture's size, nothing is taken for the camera's
     spread = _spread(track, *seed.undo(frame, x, y))
     background = spread <= float(np.median(spread))
-    warp = steps.composed_views(background[step_index])
     ids = np.unique(track)
-    for _ in range(ROUNDS + 2):  # these rounds gather the still tracks more slowly than a turn's
-        warp = _fitted_views(track, frame, x, y, np.isin(track, ids[background]), seed.first_frame, warp)
-        path = CameraPath.from_warps(seed.first_frame, warp)
+    last = [steps.composed_views(background[step_index])]  # the views fitted last, each round's start
+
+    def fitted(still: np.ndarray) -> CameraPath:
+        last[0] = _fitted_views(track, frame, x, y, np.isin(track, ids[still]), seed.first_frame, last[0])
+        return CameraPath.from_warps(seed.first_frame, last[0])
+
+    # these rounds gather the still tracks more slowly than a turn's
+    found = _in_turn(fitted, background, track, frame, x, y, still_px, ROUNDS + 2)
+    if found is None:
+        return None
+    zoom = np.sqrt(np.abs(np.linalg.det(last[0][:, :2, :2])))
+    return None if zoom.max() > MAX_ZOOM or zoom.min() < 1.0 / MAX_ZOOM else found
+
+
+def _in_turn(fit: Callable[[np.ndarray], CameraPath], background: np.ndarray, track: np.ndarray, frame: np.ndarray,
+             x: np.ndarray, y: np.ndarray, still_px: float,
+             rounds: int) -> tuple[CameraPath, np.ndarray, np.ndarray] | None:
+    """The camera's path (``fit`` from the still tracks, a boolean per long track) and the still
+    tracks (within ``still_px`` rms once it is taken out) found in turn from a first guess of
+    them, ``rounds`` at most: the path, each long track's spread and the still ones; None where
+    fewer than :data:`MIN_BACKGROUND` stay still."""
+    for _ in range(rounds):
+        path = fit(background)
         spread = _spread(track, *path.undo(frame, x, y))
         updated = spread <= still_px
         if updated.sum() < MIN_BACKGROUND:
@@ -252,9 +264,6 @@ def _zoomed(track: np.ndarray, frame: np.ndarray, x: np.ndarray, y: np.ndarray, 
         if (updated == background).all():
             break
         background = updated
-    zoom = np.sqrt(np.abs(np.linalg.det(warp[:, :2, :2])))
-    if zoom.max() > MAX_ZOOM or zoom.min() < 1.0 / MAX_ZOOM:
-        return None
     return path, spread, background
 
 
