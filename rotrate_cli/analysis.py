@@ -111,6 +111,8 @@ class Analysis:
             (orthographic).
         shake: a hand-held camera's shake, taken out of the tracks (:mod:`rotrate_cli.tracking.steady`);
             None where none showed.
+        camera_path: that camera's path, frame by frame (the fixation is where it stood at the first
+            frame); None where none showed.
         direction_in_picture: True when the sense of turning is the one the tracks go round the
             fixation in the picture (a view from above or face on: :mod:`rotrate_cli.scene.sense`).
 
@@ -151,6 +153,7 @@ class Analysis:
     view: View | None = None
     camera: Camera | None = None
     shake: Shake | None = None
+    camera_path: CameraPath | None = None
     direction_in_picture: bool = False
 
     @property
@@ -391,7 +394,8 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         axis_angle_from=(geometry.angle_from if geometry.angle_from in ("motion", "paths", "lens")
                          else config.angle_from),
         elevation_deg=geometry.elevation_deg, verdict=verdict, period=period, clock=footage.info.clock,
-        camera_from=geometry.lens.source, view=geometry.view, shake=footage.shake, **measured_by,  # type: ignore[arg-type]
+        camera_from=geometry.lens.source, view=geometry.view, shake=footage.shake, camera_path=footage.camera,
+        **measured_by,  # type: ignore[arg-type]
     )
 
 

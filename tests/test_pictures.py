@@ -246,3 +246,23 @@ def test_writing_the_overlay_reports_its_progress_frame_by_frame(tmp_path: Path)
                                                                                                           total)))
     assert written == len(seen) and [done for done, _ in seen] == list(range(1, written + 1))
     assert seen[-1][1] == FrameSource(BOX).info.frame_count
+
+
+def test_the_overlay_draws_the_axis_where_a_moving_camera_saw_it() -> None:
+    """The fixation is where the camera stood at the first frame; a camera held in the hand moved
+    on, and the overlay's axis followed the first frame's place (a clock's cross 36 px off its
+    centre half-way through). It is drawn where the camera saw it, turned with the camera."""
+    import math
+
+    import numpy as np
+
+    from rotrate_cli.output.overlay import _axis_seen
+    from rotrate_cli.tracking.steady import CameraPath
+
+    turn = math.radians(10.0)
+    path = CameraPath(0, np.array([0.0, turn]), np.array([[0.0, 0.0], [30.0, -20.0]]))
+    assert _axis_seen((100.0, 50.0), 0.0, None, 1) == ((100.0, 50.0), 0.0)
+    (x, y), angle = _axis_seen((100.0, 50.0), 0.0, path, 1)
+    assert x == pytest.approx(math.cos(turn) * 100 - math.sin(turn) * 50 + 30)
+    assert y == pytest.approx(math.sin(turn) * 100 + math.cos(turn) * 50 - 20)
+    assert angle == pytest.approx(10.0)

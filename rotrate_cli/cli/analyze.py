@@ -351,7 +351,7 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
     named = {int(track): str(reason) for track, reason in zip(features["track"], features["reason"], strict=True)
              if reason in ("reflection", "slides", "other_motion")}
     write_overlay(FrameSource(source, fps=fps, times_s=times_s), path, analysis.tracks, inliers, analysis.fixation_px,
-                  analysis.axis_angle_deg, at, start, end, force, named, progress)
+                  analysis.axis_angle_deg, at, start, end, force, named, progress, analysis.camera_path)
 
 
 def _detail_paths(sources: list[str], folder: Path, suffix: str) -> list[Path]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -20,6 +21,9 @@ from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene.axis import unit_offset
 from rotrate_cli.video.decode import FrameSource
 from rotrate_cli.video.frames import Frame
+
+if TYPE_CHECKING:
+    from rotrate_cli.tracking.steady import CameraPath
 
 #: Colours (BGR).
 AXIS_COLOUR = (0, 215, 255)
@@ -120,6 +124,7 @@ def write_overlay(
     force: bool = False,
     named: dict[int, str] | None = None,
     progress: Callable[[int, int | None], None] | None = None,
+    camera: CameraPath | None = None,
 ) -> int:
     """Write the overlay video: each frame of ``source`` between ``start_s`` and ``end_s`` with
     the axis, each track's last :data:`TRAIL_S` of path (inliers green, rejected red, those
@@ -128,7 +133,9 @@ def write_overlay(
 
     ``tracks`` has ``track, frame, x_px, y_px`` (features numbered as in the report).
     ``progress`` is called after each frame written with the count so far and the source's frame
-    count (None where unknown). Returns the number of frames written.
+    count (None where unknown). ``camera``: a moving camera's path, where the axis (``point_px``,
+    ``angle_deg``, where the camera stood at the first frame) is drawn where it saw it. Returns the
+    number of frames written.
     """
     info = source.info
     fourcc = cv2.VideoWriter_fourcc(*("mp4v" if path.suffix.lower() in {".mp4", ".mov", ".mkv", ""} else "MJPG"))
@@ -138,7 +145,7 @@ def write_overlay(
             raise OutputError(f"could not open a video writer for {path}; use a .mp4 or .avi name")
         try:
             return _draw_frames(source, writer, tracks, inliers, point_px, angle_deg, running, start_s, end_s,
-                                named or {}, progress)
+                                named or {}, progress, camera)
         finally:
             writer.release()
 
@@ -147,7 +154,7 @@ def _draw_frames(
     source: FrameSource, writer: cv2.VideoWriter, tracks: pd.DataFrame, inliers: set[int],
     point_px: tuple[float, float], angle_deg: float, running: Callable[[float], tuple[float, float, float]],
     start_s: float, end_s: float | None, named: dict[int, str],
-    progress: Callable[[int, int | None], None] | None = None,
+    progress: Callable[[int, int | None], None] | None = None, camera: CameraPath | None = None,
 ) -> int:
     """Draw and write the overlay's frames (see :func:`write_overlay`); returns how many."""
     info = source.info
@@ -157,7 +164,7 @@ def _draw_frames(
     scale = max(0.45, min(info.width_px, info.height_px) / 800)
     for frame in source.frames(start_s, end_s):
         image = frame.image
-        draw_axis(image, point_px, angle_deg)
+        draw_axis(image, *_axis_seen(point_px, angle_deg, camera, frame.index))
         here = by_frame.get(frame.index)
         if here is not None:
             for track, x, y in zip(here["track"].to_numpy(), here["x_px"].to_numpy(), here["y_px"].to_numpy(),
@@ -189,6 +196,18 @@ def _draw_frames(
         if progress is not None:
             progress(written, info.frame_count)
     return written
+
+
+def _axis_seen(point_px: tuple[float, float], angle_deg: float, camera: CameraPath | None,
+               frame: int) -> tuple[tuple[float, float], float]:
+    """The axis's point and angle where a moving ``camera`` saw them at ``frame`` (as given
+    without one)."""
+    if camera is None:
+        return point_px, angle_deg
+    ux, uy = unit_offset(angle_deg)
+    x, y = camera.redo(np.full(2, frame), np.array([point_px[0], point_px[0] + ux]),
+                       np.array([point_px[1], point_px[1] + uy]))
+    return (float(x[0]), float(y[0])), math.degrees(math.atan2(float(y[1] - y[0]), float(x[1] - x[0])))
 
 
 def _legend(image: np.ndarray, scale: float, names: list[str]) -> None:
