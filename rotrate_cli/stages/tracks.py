@@ -219,10 +219,10 @@ def _shake_note(shake: Shake) -> str:
 #: The picture's rim: this share of its width and height on every side (of the thumbnails).
 RIM_SHARE = 0.1
 #: A rim that moves: it differs from the clip's first frame, at this quantile of the frames, by
-#: this many times its typical change from one frame to the next, and by this
-#: many grey levels at least. Between the first and last frames alone, a camera that wobbled
-#: about where it started and ended near it was taken for a still one (a tilted clock filmed so
-#: read +199%, weak, from a return of its swaying picture).
+#: this many times its typical change from one frame to the next, and by this many grey levels at
+#: least. Between the first and last frames alone, a camera that wobbled about where it started
+#: and ended near it was taken for a still one (a tilted clock filmed so read +199%, weak, from a
+#: return of its swaying picture).
 RIM_QUANTILE = 0.9
 RIM_MOVES = 3.0
 RIM_LEVELS = 2.0

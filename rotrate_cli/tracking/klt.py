@@ -41,8 +41,8 @@ JOLT_FRAMES = 31
 #: points again (their median): a hand that trembles jolts the picture every frame, and the usual
 #: fraction lost rises with it (a clock filmed in the hand, 2 px of tremor a frame: a third of
 #: the points lost each frame, 99% found again; tracks 3 frames long at the median, the camera
-#: not found, the rate 9 times the truth and its interval missing; now -0.3%). The record's
-#: grooves: 1% found again, the bicycle wheel's 1%.
+#: not found, the rate 8 times the truth and its interval missing; now -0.47%, `make
+#: bench-clock`'s in-hand-tremor-10s). The record's grooves: 1% found again, the bicycle wheel's 1%.
 RECOVERING = 0.8
 #: Lucas-Kanade stopping rule (iterations, last step in px) of the forward pass, which gives the
 #: positions. Stopping at a 0.03 px step rather than 0.01 costs nothing measurable (accuracy suite:
