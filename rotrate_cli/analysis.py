@@ -27,6 +27,7 @@ from rotrate_cli.runtime.memory import release_free_memory
 from rotrate_cli.runtime.pools import pipeline_threads
 from rotrate_cli.scene.focal import FocalEstimate
 from rotrate_cli.scene.picture_angle import PictureAngle
+from rotrate_cli.scene.plane_turn import keep_for_plane
 from rotrate_cli.scene.reasons import against_rate, name_rejections, track_places
 from rotrate_cli.scene.sense import not_side_view, sense_of_turning
 from rotrate_cli.scene.turning import PictureTurning, picture_turning
@@ -256,7 +257,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
             return _repetition_only(footage, repetition.result(), config, kept, view_tracks)
         finally:
             footage.keyframes.clear()
-        footage = replace(footage, tracks=tracks.iloc[:0])
+        footage = replace(footage, tracks=tracks.iloc[:0], plane_tracks=keep_for_plane(tracks))
         del tracks  # the offsets hold what is needed: a long clip's positions need not stay
         release_free_memory()
         if stage is not None:

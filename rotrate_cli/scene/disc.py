@@ -109,6 +109,43 @@ def unrolled(shape_px: tuple[int, int], view: DiscView, angles: int, rings: int 
                     np.where(inside, map_y, -10.0).astype(np.float32), inside)
 
 
+@dataclass(frozen=True)
+class PlaneMap:
+    """A turning plane's picture as its tracks tell it (:mod:`rotrate_cli.scene.plane_turn`),
+    through no camera model: the picture taken through the plane's horizon to infinity
+    (``x / (a x + b y + 1)``, :attr:`horizon`) is an affine view of it, in which its circles about
+    the axis are the ellipses ``centre + metric (cos, sin) r``.
+
+    Attributes:
+        horizon: ``a, b`` (per px) of the horizon ``a x + b y + 1 = 0``.
+        centre: the axis's point, in the picture taken through the horizon.
+        metric: 2 x 2, a circle's radius to the picture taken through the horizon.
+        largest: the largest radius of the plane the tracks reached (in the metric's units).
+    """
+
+    horizon: tuple[float, float]
+    centre: tuple[float, float]
+    metric: tuple[tuple[float, float], tuple[float, float]]
+    largest: float
+
+    def unrolled(self, shape_px: tuple[int, int], scale: float, angles: int, rings: int) -> Unrolled:
+        """The maps that unroll a picture ``shape_px`` (height, width; ``scale`` times the
+        tracks' picture) on ``rings`` circles out to 1.2 times :attr:`largest`."""
+        height, width = shape_px
+        radius = np.linspace(0.02, 1.2, max(rings, 8)) * self.largest
+        angle = np.arange(angles) * (2.0 * math.pi / angles)
+        metric = np.array(self.metric)
+        circle = np.stack([np.cos(angle), np.sin(angle)], axis=1) @ metric.T  # (angles, 2)
+        flat = np.array(self.centre)[None, None, :] + circle[:, None, :] * radius[None, :, None]
+        away = 1.0 - flat @ np.array(self.horizon)
+        ahead = away > 1e-3
+        picture = flat / np.where(ahead, away, 1.0)[..., None] * scale
+        map_x, map_y = picture[..., 0], picture[..., 1]
+        inside = ahead & (map_x >= 1) & (map_x < width - 2) & (map_y >= 1) & (map_y < height - 2)
+        return Unrolled(np.where(inside, map_x, -10.0).astype(np.float32),
+                        np.where(inside, map_y, -10.0).astype(np.float32), inside)
+
+
 def _largest_radius(width: int, height: int, principal: np.ndarray, focal: float, axis_point: np.ndarray,
                     normal: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> float:
     """The largest radius of the plane the picture shows (its border's points met on the plane),

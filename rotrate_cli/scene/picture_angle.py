@@ -31,6 +31,7 @@ from rotrate_cli.scene.disc import (
     LAG_SHARES,
     Candidate,
     DiscView,
+    PlaneMap,
     RingCorrelations,
     fitted_views,
     moving_weight,
@@ -129,6 +130,9 @@ class PictureAngle:
         heights: each change's peak (after the first, at ``times_s[1:]``), or None.
         thin_part: measured from a thin part against the clip's still picture (a clock's hand:
             :mod:`rotrate_cli.scene.hand`), not from the picture's changes.
+        plane: measured from the tracks as one plane turning (:mod:`rotrate_cli.scene.plane_turn`),
+            through no view: ``view`` holds only the axis's point, and ``plane_map`` the plane's
+            picture as the tracks tell it.
     """
 
     omega_rad_s: float
@@ -144,6 +148,8 @@ class PictureAngle:
     first_step_deg: float = 0.0
     heights: np.ndarray | None = None
     thin_part: bool = False
+    plane: bool = False
+    plane_map: PlaneMap | None = None
 
 
 class AngleFrames:
@@ -281,6 +287,31 @@ def _readings(changes: list[_Change], views: list[Candidate]) -> list[PictureAng
         rest = (_through(changes, candidate.view) for candidate in views if candidate not in pool)
         readings = [angle for angle in (next((angle for angle in rest if angle is not None), None),) if angle]
     return readings
+
+
+def rate_through_map(kept: list[tuple[int, float, np.ndarray]], plane_map: PlaneMap,
+                     width_px: int) -> tuple[float, float] | None:
+    """The rate (rad/s, a magnitude) and its 95% interval's half of the picture's changes (from
+    the frames ``kept``, :class:`AngleFrames`) unrolled through ``plane_map`` (the tracks'
+    picture, ``width_px`` wide) rather than a view found from the picture; None where they tell
+    none: the picture's own check of the tracks' plane."""
+    changes = _changes(kept)
+    if len(changes) < MIN_CHANGES:
+        return None
+    maps = plane_map.unrolled(changes[0].first.shape, changes[0].first.shape[1] / width_px, ANGLES, RINGS)
+    unrolled_changes = [maps.of(change.difference) for change in changes]
+    weight = moving_weight(unrolled_changes, maps.inside)
+    correlate = RingCorrelations(unrolled_changes, weight)
+    chain = _chain(changes, unrolled_changes, weight, correlate)
+    if chain is None:
+        return None
+    times, angles = chain[0], chain[1]
+    if abs(angles[-1] - angles[0]) < MIN_TURNED_DEG:
+        return None
+    rate, scatter = _rate_of(changes, correlate, times, angles)
+    if not math.isfinite(rate):
+        return None
+    return math.radians(abs(rate)), math.radians(1.96 * scatter)
 
 
 def _clearly_short(angle: PictureAngle, best: PictureAngle) -> bool:

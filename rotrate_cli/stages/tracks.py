@@ -83,6 +83,9 @@ class Footage:
             None where none showed. ``camera``: its motion, to draw the tracks on its frames.
         matched: the tracks are features matched from photograph to photograph
             (:mod:`rotrate_cli.tracking.matched`): short, and sampled sparsely on the turn.
+        plane_tracks: the moving tracks at some frames, kept for the plane's turning
+            (:func:`rotrate_cli.scene.plane_turn.keep_for_plane`) once ``tracks`` are let go; None
+            while ``tracks`` are held.
     """
 
     info: VideoInfo
@@ -97,6 +100,7 @@ class Footage:
     shake: Shake | None = None
     camera: CameraPath | None = None
     matched: bool = False
+    plane_tracks: pd.DataFrame | None = None
 
 
 class NothingTracked(NoResultError):

@@ -230,6 +230,8 @@ class Verdict:
             tracks' rate``, ``the picture's turning``); "" where nothing told it.
         thin_part: with the picture's turning, True where it is a thin part's against the clip's
             still picture (a clock's hand: :mod:`rotrate_cli.scene.hand`).
+        plane: with the picture's turning, True where it is the tracks' as one plane turning
+            (:mod:`rotrate_cli.scene.plane_turn`).
     """
 
     omega_rad_s: float
@@ -242,6 +244,7 @@ class Verdict:
     notes: tuple[str, ...]
     repeats_told_by: str = ""
     thin_part: bool = False
+    plane: bool = False
 
 
 def _half_width(omega: float, low: float, high: float) -> float:
@@ -291,7 +294,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
         if tracks is not None and 0 < tracks.omega_rad_s < math.inf:
             told = replace(told, spanned_by=(tracks.omega_low_rad_s, tracks.omega_high_rad_s))
     omega, low, high = period.omega_rad_s(repeats)
-    rate_from, spanned, thin_part = "repetition", False, False
+    rate_from, spanned, thin_part, plane = "repetition", False, False, False
     if not confirmed:  # the interval holds every count of repeats a turn still open: weak for that already
         low = min(low, period.omega_rad_s(max(told.candidates))[1])
         spanned = True
@@ -347,14 +350,14 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                          f"{high:.4g}] for a turn); its own turning, measured more closely over the clip, agrees "
                          "and gives the rate")
             omega, low, high, rate_from = closer.omega_rad_s, closer.omega_low_rad_s, closer.omega_high_rad_s, "turning"
-            thin_part = closer.thin_part
+            thin_part, plane = closer.thin_part, closer.plane
     if period.drift_s > CHANGE_FRACTION * period.period_s:
         notes.append(f"the rate changes over the clip (its halves repeat {period.drift_s / period.period_s:.1%} "
                      "apart); the result is an average: see omega(t) with `window_s`")
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not spanned:  # spanned: weak for its doubt already
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, rate_from, repeats, "weak" if weak else "good", tuple(weak), tuple(notes),
-                   told.told_by if confirmed else "", thin_part)
+                   told.told_by if confirmed else "", thin_part, plane)
 
 
 #: A return seen once whose interval is narrower than this (half, of its rate) is not set against
@@ -488,10 +491,12 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
     omega, low, high = angle.omega_rad_s, angle.omega_low_rad_s, angle.omega_high_rad_s
     weak: list[str] = []
     notes = [f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, measured through "
-             f"the plane's view (tilted {angle.view.tilt_deg:.0f} degrees)" if not angle.thin_part else
+             f"the plane's view (tilted {angle.view.tilt_deg:.0f} degrees)" if not (angle.thin_part or angle.plane) else
              f"the rate is the picture's own turning: a thin part (a hand, a needle) against the clip's still picture, "
              f"{angle.turned_deg:.0f} degrees seen turned (its plane tilted {angle.view.tilt_deg:.0f} degrees, as its "
-             "length shows)"]
+             "length shows)" if angle.thin_part else
+             f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, the tracks fitted as "
+             "one plane turning about its axis (through any view)"]
     # the ``doubts`` are of the tracks' rate: told only where it is the one reported
     if angle.alike_deg is not None and angle.first_step_deg != 0:
         other = omega * abs(angle.alike_deg / angle.first_step_deg)
@@ -499,7 +504,14 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
                     f"{abs(angle.alike_deg):.1f} degrees alike (a body that looks alike several times a turn, "
                     f"turning fast): {omega:.4g} or {other:.4g} rad/s; the 95% interval holds both")
         low, high = min(low, other), max(high, other)
-    if tracks is not None and 0 < tracks.omega_rad_s < math.inf:
+    if angle.plane and tracks is not None and 0 < tracks.omega_rad_s < math.inf:
+        # the same tracks, fitted as one plane turning through any view: their one-point fits
+        # (the paper's model: a fixation on the axis, a view from nearly the side) are the looser
+        # model of them (a printed disc tilted 45 degrees, its axis below the frame: +39% against +0.3%)
+        if not (tracks.omega_low_rad_s <= omega <= tracks.omega_high_rad_s):
+            notes.append(f"the tracks' one-point fits read {tracks.omega_rad_s:.4g} rad/s; fitted as one plane "
+                         "turning, they read the rate reported")
+    elif tracks is not None and 0 < tracks.omega_rad_s < math.inf:
         told = tracks_used >= MIN_TRACKS and _half_width(
             tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s) <= TRACKS_TELL
         agrees = (tracks.omega_low_rad_s / (1 + TRACKS_ALLOWANCE) <= omega
@@ -535,4 +547,4 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not weak:
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, "turning", 1, "weak" if weak else "good", tuple(weak), tuple(notes),
-                   thin_part=angle.thin_part)
+                   thin_part=angle.thin_part, plane=angle.plane)

@@ -1,0 +1,204 @@
+"""A turning plane's angle from its tracks through any view (rotrate_cli.scene.plane_turn): points
+on a disc seen through a tilted pinhole camera, its axis out of the frame, read within a fraction of
+a percent; a box's side face (turning about an axis that lies in it), still points and a mirror
+tell none; the verdict reports it over the tracks' one-point fits."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rotrate_cli.fitting.outliers import Combined
+from rotrate_cli.runtime.lazy import pandas as pd
+from rotrate_cli.scene.plane_turn import keep_for_plane, plane_angle
+from rotrate_cli.stages.verdict import judge
+
+FPS = 30.0
+
+
+def _camera(tilt_deg: float, focal_px: float, centre_px: tuple[float, float]) -> np.ndarray:
+    """The homography from the plane (its axis at the origin, px) to a 960x540 picture: the plane
+    tilted ``tilt_deg`` about the picture's x axis, the axis's point at ``centre_px``."""
+    t = math.radians(tilt_deg)
+    k = np.array([[focal_px, 0.0, centre_px[0]], [0.0, focal_px, centre_px[1]], [0.0, 0.0, 1.0]])
+    return k @ np.array([[1.0, 0.0, 0.0], [0.0, math.cos(t), 0.0], [0.0, math.sin(t), focal_px]])
+
+
+def _tracks(omega_rad_s: float, frames: int, tilt_deg: float = 45.0, centre_px: tuple[float, float] = (430.0, 610.0),
+            noise_px: float = 0.15, side_face: bool = False, life: int = 12, seed: int = 2) -> pd.DataFrame:
+    """Tracks of points on a turning disc (or, ``side_face``, on a plane turning about an axis in
+    it), each followed ``life`` frames, with noise; the points seen in the 960x540 picture only."""
+    rng = np.random.default_rng(seed)
+    camera = _camera(tilt_deg, 1150.0, centre_px)
+    rows = []
+    track = 0
+    for born in range(0, frames, max(1, life // 3)):
+        radius = 420.0 * np.sqrt(rng.random(120))
+        phase = rng.random(120) * 2 * math.pi
+        for r, p in zip(radius, phase, strict=True):
+            for frame in range(born, min(frames, born + life)):
+                angle = p + omega_rad_s * frame / FPS
+                if side_face:  # the face's points turn about its vertical line x = 0: depth changes
+                    point = np.array([r * math.cos(p) * math.cos(omega_rad_s * frame / FPS), r * math.sin(p) - 200.0,
+                                      r * math.cos(p) * math.sin(omega_rad_s * frame / FPS)])
+                    seen = np.array([[1150.0, 0, centre_px[0]], [0, 1150.0, 300.0], [0, 0, 1.0]]) @ (
+                        point + np.array([0.0, 0.0, 1500.0]))
+                else:
+                    seen = camera @ np.array([r * math.cos(angle), r * math.sin(angle), 1.0])
+                x, y = seen[:2] / seen[2] + rng.normal(0.0, noise_px, 2)
+                if 0 <= x < 960 and 0 <= y < 540:
+                    rows.append((frame, frame / FPS, track, x, y))
+            track += 1
+    table = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
+    return table.sort_values(["track", "frame"]).reset_index(drop=True)
+
+
+@pytest.mark.parametrize(("omega", "tilt_deg", "centre_px"), [(2.0, 45.0, (430.0, 610.0)), (-1.3, 65.0, (480.0, 640.0)),
+                                                             (0.9, 0.0, (1000.0, 270.0)), (3.0, 30.0, (480.0, 270.0))])
+def test_a_third_of_a_turn_through_a_tilted_lens_reads_the_rate(omega: float, tilt_deg: float,
+                                                                 centre_px: tuple[float, float]) -> None:
+    frames = int(0.3 * 2 * math.pi / abs(omega) * FPS) + 1
+    angle = plane_angle(keep_for_plane(_tracks(omega, frames, tilt_deg, centre_px)))
+    assert angle is not None and angle.plane
+    assert angle.omega_rad_s == pytest.approx(abs(omega), rel=0.005)
+    assert angle.omega_low_rad_s <= abs(omega) <= angle.omega_high_rad_s
+    assert angle.omega_high_rad_s - angle.omega_low_rad_s < 0.05 * abs(omega)
+    # the picture's y runs down: a positive omega of the plane turns clockwise as shown here
+    # wherever the plane faces the camera with its x axis along the picture's
+    assert angle.sense == (-1 if omega > 0 else 1)
+    # its axis's point, where the camera sees it (out of the frame for three of them)
+    assert math.dist(angle.view.centre_px, centre_px) < 5.0
+    assert angle.turned_deg == pytest.approx(0.3 * 360.0, abs=8.0)
+
+
+def test_a_face_turning_about_an_axis_in_it_tells_no_rate() -> None:
+    # a box's side: its points' homographies fix a line, so their eigenvalues are real
+    assert plane_angle(keep_for_plane(_tracks(1.0, 60, side_face=True))) is None
+
+
+def test_still_points_tell_no_rate() -> None:
+    assert plane_angle(keep_for_plane(_tracks(0.0, 40))) is None
+    assert plane_angle(keep_for_plane(_tracks(2.0, 40).iloc[:0])) is None
+
+
+def test_the_kept_tracks_are_the_moving_ones_at_few_frames() -> None:
+    moving = _tracks(1.0, 400, life=400)
+    still = moving.assign(track=moving["track"] + 10_000, x_px=5.0, y_px=5.0)
+    kept = keep_for_plane(pd.concat([moving, still]).reset_index(drop=True))
+    assert kept["track"].max() < 10_000
+    assert kept["frame"].nunique() <= 160
+
+
+def test_the_verdict_reports_the_plane_over_the_tracks_one_point_fits() -> None:
+    truth = 2.0
+    angle = plane_angle(keep_for_plane(_tracks(truth, int(0.3 * 2 * math.pi / truth * FPS) + 1)))
+    assert angle is not None
+    loose = Combined(omega_rad_s=2.8, omega_low_rad_s=2.7, omega_high_rad_s=2.9, tracks_used=40)
+    verdict = judge(loose, None, 40, (), angle=angle)
+    assert verdict.rate_from == "turning" and verdict.quality == "good"
+    assert verdict.omega_rad_s == pytest.approx(truth, rel=0.005)
+    assert any("one-point fits read 2.8" in note for note in verdict.notes)
+
+
+def _perspective_disc_clip(path, omega: float, tilt_deg: float = 45.0, seed: int = 4) -> None:
+    """A disc printed with a photograph-like texture (blobs at several scales), tilted
+    ``tilt_deg`` before a 50-degree lens, its axis below the 640x360 frame, over a still textured
+    floor: a third of a turn at ``omega``."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    side = 560
+    texture = np.zeros((side, side), np.float32)
+    for cells in (6, 14, 40):
+        texture += cv2.resize(rng.random((cells, cells)).astype(np.float32), (side, side),
+                              interpolation=cv2.INTER_CUBIC)
+    texture = (texture - texture.min()) / np.ptp(texture) * 220 + 20
+    floor = cv2.resize(rng.random((24, 40)).astype(np.float32), (640, 360), interpolation=cv2.INTER_CUBIC) * 120 + 60
+    yy, xx = np.mgrid[:side, :side]
+    disc = ((xx - side / 2 + 0.5) ** 2 + (yy - side / 2 + 0.5) ** 2 <= (side / 2) ** 2).astype(np.float32)
+    t, focal, centre = math.radians(tilt_deg), 690.0, (300.0, 400.0)
+    k = np.array([[focal, 0, centre[0]], [0, focal, centre[1]], [0, 0, 1.0]])
+    plane = k @ np.array([[1.0, 0, 0], [0, math.cos(t), 0], [0, math.sin(t), focal]])
+    frames = int(0.3 * 2 * math.pi / omega * FPS) + 1
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), FPS, (640, 360))
+    for frame in range(frames):
+        a = omega * frame / FPS
+        turn = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1.0]])
+        to_picture = plane @ turn @ np.array([[1.0, 0, -side / 2 + 0.5], [0, 1, -side / 2 + 0.5], [0, 0, 1]])
+        body = cv2.warpPerspective(texture, to_picture, (640, 360), flags=cv2.INTER_LINEAR)
+        cover = cv2.warpPerspective(disc, to_picture, (640, 360), flags=cv2.INTER_LINEAR)
+        picture = floor * (1 - cover) + body * cover + rng.normal(0, 1.5, cover.shape)
+        writer.write(cv2.cvtColor(np.clip(picture, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
+    writer.release()
+
+
+def test_a_printed_disc_before_a_lens_its_axis_out_of_the_frame_reads_good(tmp_path) -> None:
+    from rotrate_cli.analysis import analyze
+    from rotrate_cli.config import AnalysisConfig
+
+    clip = tmp_path / "disc.mp4"
+    _perspective_disc_clip(clip, 2.0)
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None))
+    assert analysis.rate_from == "turning" and analysis.quality == "good"
+    assert analysis.omega_rad_s == pytest.approx(2.0, rel=0.01)
+    assert analysis.omega_low_rad_s <= 2.0 <= analysis.omega_high_rad_s
+    assert any("one plane turning" in note for note in analysis.verdict.notes)
+
+
+def _face_on_frames(deg_per_frame: float, count: int, size: int = 240) -> list:
+    """A textured disc turning face on about the picture's centre over a still textured floor."""
+    import cv2
+
+    from rotrate_cli.video.frames import Frame
+
+    rng = np.random.default_rng(6)
+    disc = cv2.resize(rng.random((size // 8, size // 8)).astype(np.float32), (size, size),
+                      interpolation=cv2.INTER_CUBIC) * 200 + 20
+    floor = cv2.resize(rng.random((size // 8, size // 8)).astype(np.float32), (size, size),
+                       interpolation=cv2.INTER_CUBIC) * 200 + 20
+    yy, xx = np.mgrid[:size, :size]
+    inside = (xx - size / 2) ** 2 + (yy - size / 2) ** 2 < (0.45 * size) ** 2
+    frames = []
+    for index in range(count):
+        turn = cv2.getRotationMatrix2D((size / 2, size / 2), deg_per_frame * index, 1.0)
+        picture = np.where(inside, cv2.warpAffine(disc, turn, (size, size), flags=cv2.INTER_CUBIC), floor)
+        frames.append(Frame(index, index / FPS, cv2.cvtColor(picture.astype(np.uint8), cv2.COLOR_GRAY2BGR)))
+    return frames
+
+
+def test_the_picture_bears_out_the_tracks_plane_only_at_its_own_rate() -> None:
+    from dataclasses import replace
+
+    from rotrate_cli.scene.disc import PlaneMap
+    from rotrate_cli.scene.picture_angle import AngleFrames, PictureAngle
+    from rotrate_cli.stages.angle import _borne_out
+
+    kept = AngleFrames()
+    for _ in kept.tap(iter(_face_on_frames(4.0, 30))):
+        pass
+    truth = math.radians(4.0 * FPS)
+    face_on = PlaneMap((0.0, 0.0), (120.0, 120.0), ((1.0, 0.0), (0.0, 1.0)), 105.0)
+    plane = PictureAngle(truth, 0.99 * truth, 1.01 * truth, 1, np.zeros(2), np.zeros(2), 116.0, 1.0,
+                         __import__("rotrate_cli.scene.disc", fromlist=["DiscView"]).DiscView((120.0, 120.0), 0, 0, 1e9),
+                         plane=True, plane_map=face_on)
+    assert _borne_out(plane, kept.frames, 240)
+    # tracks dragged along by thin spokes read a quarter slow: the picture's changes do not
+    slow = replace(plane, omega_rad_s=0.75 * truth, omega_low_rad_s=0.74 * truth, omega_high_rad_s=0.76 * truth)
+    assert not _borne_out(slow, kept.frames, 240)
+    assert not _borne_out(replace(plane, plane_map=None), kept.frames, 240)
+
+
+def test_a_flat_spoked_wheel_over_a_textured_floor_is_not_read_from_its_dragged_tracks(tmp_path) -> None:
+    # its tracks are the floor's points dragged along by the thin spokes: one plane turning 16-25%
+    # slow, which the picture's changes through that plane do not bear out
+    from rotrate_cli.analysis import analyze
+    from rotrate_cli.config import AnalysisConfig
+    from rotrate_cli.video.rotor import RotorScene, write_rotor_clip
+
+    clip = tmp_path / "spokes.mp4"
+    write_rotor_clip(RotorScene("spokes", 6, 1.5, texture=0.0, duration_s=5.0, seed=8), clip)
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None))
+    assert analysis.verdict is None or not analysis.verdict.plane
+    assert analysis.quality == "weak" or analysis.omega_rad_s == pytest.approx(1.5, rel=0.01)
