@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: bench-symmetry bench-turning bench-clock docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
+.PHONY: bench-symmetry bench-turning bench-printed bench-clock docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -96,6 +96,10 @@ bench-symmetry: $(STAMP)
 ## bench-turning: flat rotors rendered under a turn (0.3), face on and tilted, axis in and out of the frame (about a minute)
 bench-turning: $(STAMP)
 	$(BIN)/python benchmarks/bench_turning.py
+
+## bench-printed: discs printed with the shared real photographs, a third of a turn before a 45-degree lens, face on and tilted 45-72 degrees, axis in and below the frame, H.264 (renders cached in bench_out/printed; about two minutes the first time; skips without ../shared)
+bench-printed: $(STAMP)
+	$(BIN)/python benchmarks/bench_printed.py
 
 ## bench-random: 20 random rendered conditions (lenses to 75 degrees, 2-6 s, elevation to 60) measured with default settings and --fixation auto (about 10 minutes the first time)
 bench-random: $(STAMP)

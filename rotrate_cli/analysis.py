@@ -371,6 +371,12 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         geometry = view_at_rate(geometry, view_tracks, verdict.omega_rad_s, verdict.rate_from, size_px)
         direction, in_picture = sense_of_turning(direction, geometry.view, view_tracks, geometry.fixation_px,
                                                  verdict.omega_rad_s)
+    reading = measured.get("angle")
+    if verdict.rate_from == "turning" and verdict.plane and reading is not None:
+        # the tracks' plane tells its sense as the picture shows it, through any view (its paths
+        # about the axis tell none where the view read at the rate is near the side: a disc tilted
+        # 60 degrees, its axis below the frame, read clockwise from the side-view rule, turning anticlockwise)
+        direction, in_picture = ("ccw" if reading.sense > 0 else "cw"), True
     checks = checked.notes
     if verdict.rate_from == "turning" and (checks or checked.doubts):
         # the tracks' own checks and doubts are of a rate not reported

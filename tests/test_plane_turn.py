@@ -145,6 +145,8 @@ def test_a_printed_disc_before_a_lens_its_axis_out_of_the_frame_reads_good(tmp_p
     assert analysis.omega_rad_s == pytest.approx(2.0, rel=0.01)
     assert analysis.omega_low_rad_s <= 2.0 <= analysis.omega_high_rad_s
     assert any("one plane turning" in note for note in analysis.verdict.notes)
+    # the plane turns its x axis towards its y axis, which the lens shows downwards: clockwise
+    assert (analysis.direction, analysis.direction_in_picture) == ("cw", True)
 
 
 def _face_on_frames(deg_per_frame: float, count: int, size: int = 240) -> list:
