@@ -173,7 +173,7 @@ def _face_on_frames(deg_per_frame: float, count: int, size: int = 240) -> list:
 def test_the_picture_bears_out_the_tracks_plane_only_at_its_own_rate() -> None:
     from dataclasses import replace
 
-    from rotrate_cli.scene.disc import PlaneMap
+    from rotrate_cli.scene.disc import DiscView, PlaneMap
     from rotrate_cli.scene.picture_angle import AngleFrames, PictureAngle
     from rotrate_cli.stages.angle import _borne_out
 
@@ -183,8 +183,7 @@ def test_the_picture_bears_out_the_tracks_plane_only_at_its_own_rate() -> None:
     truth = math.radians(4.0 * FPS)
     face_on = PlaneMap((0.0, 0.0), (120.0, 120.0), ((1.0, 0.0), (0.0, 1.0)), 105.0)
     plane = PictureAngle(truth, 0.99 * truth, 1.01 * truth, 1, np.zeros(2), np.zeros(2), 116.0, 1.0,
-                         __import__("rotrate_cli.scene.disc", fromlist=["DiscView"]).DiscView((120.0, 120.0), 0, 0, 1e9),
-                         plane=True, plane_map=face_on)
+                         DiscView((120.0, 120.0), 0.0, 0.0, math.inf), plane=True, plane_map=face_on)
     assert _borne_out(plane, kept.frames, 240)
     # tracks dragged along by thin spokes read a quarter slow: the picture's changes do not
     slow = replace(plane, omega_rad_s=0.75 * truth, omega_low_rad_s=0.74 * truth, omega_high_rad_s=0.76 * truth)
@@ -192,6 +191,7 @@ def test_the_picture_bears_out_the_tracks_plane_only_at_its_own_rate() -> None:
     assert not _borne_out(replace(plane, plane_map=None), kept.frames, 240)
 
 
+@pytest.mark.slow  # renders a clip (about 8 s): make test-slow keeps make test under 4 minutes
 def test_a_flat_spoked_wheel_over_a_textured_floor_is_not_read_from_its_dragged_tracks(tmp_path) -> None:
     # its tracks are the floor's points dragged along by the thin spokes: one plane turning 16-25%
     # slow, which the picture's changes through that plane do not bear out

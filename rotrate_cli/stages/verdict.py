@@ -504,14 +504,7 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
                     f"{abs(angle.alike_deg):.1f} degrees alike (a body that looks alike several times a turn, "
                     f"turning fast): {omega:.4g} or {other:.4g} rad/s; the 95% interval holds both")
         low, high = min(low, other), max(high, other)
-    if angle.plane and tracks is not None and 0 < tracks.omega_rad_s < math.inf:
-        # the same tracks, fitted as one plane turning through any view: their one-point fits
-        # (the paper's model: a fixation on the axis, a view from nearly the side) are the looser
-        # model of them (a printed disc tilted 45 degrees, its axis below the frame: +39% against +0.3%)
-        if not (tracks.omega_low_rad_s <= omega <= tracks.omega_high_rad_s):
-            notes.append(f"the tracks' one-point fits read {tracks.omega_rad_s:.4g} rad/s; fitted as one plane "
-                         "turning, they read the rate reported")
-    elif tracks is not None and 0 < tracks.omega_rad_s < math.inf:
+    if tracks is not None and 0 < tracks.omega_rad_s < math.inf:
         told = tracks_used >= MIN_TRACKS and _half_width(
             tracks.omega_rad_s, tracks.omega_low_rad_s, tracks.omega_high_rad_s) <= TRACKS_TELL
         agrees = (tracks.omega_low_rad_s / (1 + TRACKS_ALLOWANCE) <= omega
@@ -534,7 +527,14 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
                         f"({tracks.omega_rad_s:.4g} rad/s), which is reported; the 95% interval holds both")
             return Verdict(tracks.omega_rad_s, min(low, tracks.omega_low_rad_s), max(high, tracks.omega_high_rad_s),
                            "tracks", 1, "weak", (*verdict.weak_because, *weak), (*verdict.notes, *notes[1:]))
-        if told and not agrees:
+        if told and not agrees and angle.plane:
+            # the same tracks, fitted as one plane turning through any view: their one-point fits
+            # (the paper's model: a fixation on the axis, a view from nearly the side) are the
+            # looser model of them (a printed disc tilted 45 degrees, its axis below the frame:
+            # +39% against +0.3%)
+            notes.append(f"the tracks' one-point fits read {tracks.omega_rad_s:.4g} rad/s; fitted as one plane "
+                         "turning, they read the rate reported")
+        elif told and not agrees:
             # the tracks' rate is reported (their model is the paper's, and they agree among
             # themselves); the interval holds both
             weak.append(f"the picture's turning ({omega:.4g} rad/s) disagrees with the tracks' rate "
