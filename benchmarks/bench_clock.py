@@ -26,7 +26,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.scoring import SCORE_HEADER, finish, only_option, within_case  # noqa: E402
+from benchmarks.scoring import only_option, rendered_cases  # noqa: E402
 
 OUT = ROOT / "bench_out" / "clock"
 WALL = ROOT.parent / "shared" / "data" / "real_videos" / "bicycle_wheel_frontal.mp4"
@@ -164,24 +164,10 @@ def write_clock(clock: Clock, path: Path) -> None:
 def main() -> int:
     only = only_option(__doc__ or "", "cases")
     OUT.mkdir(parents=True, exist_ok=True)
-    print(f"{'case':<22} {'truth':>8} {'rotrate':>8} {SCORE_HEADER}")
-    misses, rows, within = [], 0, 0
-    for name, clock in CASES.items():
-        if only and only not in name:
-            continue
-        path = OUT / f"{name}.mp4"
-        if not path.exists():
-            partial = path.with_suffix(".partial.mp4")
-            write_clock(clock, partial)
-            partial.replace(path)
-        rows += 1
-        near, miss = within_case(name, path, {"omega_rad_s": math.radians(clock.hand_deg_s), "direction": "n/a"},
-                                 WITHIN, width=22)
-        within += near
-        misses += [miss] if miss else []
-    return finish(f"cases {rows}; within {WITHIN:.0%}: {within}; good but off or its interval missing: {len(misses)}",
-                  misses)
-
+    chosen = [(name, OUT / f"{name}.mp4", lambda path, clock=clock: write_clock(clock, path),
+               {"omega_rad_s": math.radians(clock.hand_deg_s), "direction": "n/a"})
+              for name, clock in CASES.items() if not only or only in name]
+    return rendered_cases(chosen, WITHIN, 22, f"{WITHIN:.0%}")
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -27,7 +27,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.scoring import SCORE_HEADER, finish, footage_absent, only_option, within_case  # noqa: E402
+from benchmarks.scoring import footage_absent, only_option, rendered_cases  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 OUT = ROOT / "bench_out" / "printed"
@@ -106,22 +106,10 @@ def main() -> int:
     if footage_absent(DATA):
         return 0
     OUT.mkdir(parents=True, exist_ok=True)
-    print(f"{'case':<12} {'truth':>8} {'rotrate':>8} {SCORE_HEADER}")
-    misses, rows, within = [], 0, 0
-    for case in CASES:
-        if only and only not in case.name:
-            continue
-        path = OUT / f"{case.name}.mp4"
-        if not path.exists():
-            render(case, path)
-        truth = {"omega_rad_s": abs(case.omega_rad_s), "direction": "cw" if case.omega_rad_s > 0 else "ccw"}
-        rows += 1
-        near, miss = within_case(case.name, path, truth, WITHIN, width=12)
-        within += near
-        misses += [miss] if miss else []
-    return finish(f"cases {rows}; within {WITHIN:.0%}: {within}; good but off or its interval missing: {len(misses)}",
-                  misses)
-
+    chosen = [(case.name, OUT / f"{case.name}.mp4", lambda path, case=case: render(case, path),
+               {"omega_rad_s": abs(case.omega_rad_s), "direction": "cw" if case.omega_rad_s > 0 else "ccw"})
+              for case in CASES if not only or only in case.name]
+    return rendered_cases(chosen, WITHIN, 12, f"{WITHIN:.0%}")
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -22,7 +22,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.scoring import SCORE_HEADER, finish, only_option, within_case  # noqa: E402
+from benchmarks.scoring import only_option, rendered_cases  # noqa: E402
 from rotrate_cli.video.rotor import RotorScene, rotor_truth, write_rotor_clip  # noqa: E402
 
 OUT = ROOT / "bench_out" / "turning"
@@ -60,22 +60,9 @@ CASES = (
 def main() -> int:
     only = only_option(__doc__ or "", "cases")
     OUT.mkdir(parents=True, exist_ok=True)
-    print(f"{'case':<24} {'truth':>8} {'rotrate':>8} {SCORE_HEADER}")
-    misses, rows, within = [], 0, 0
-    for case in CASES:
-        if only and only not in case.name:
-            continue
-        path = OUT / f"{case.name}.mp4"
-        record = rotor_truth(case.rotor)
-        if not path.exists():
-            write_rotor_clip(case.rotor, path)
-        rows += 1
-        near, miss = within_case(case.name, path, record, WITHIN)
-        within += near
-        misses += [miss] if miss else []
-    return finish(f"cases {rows}; within {WITHIN:.1%}: {within}; good but off or its interval missing: {len(misses)}",
-                  misses)
-
+    chosen = [(case.name, OUT / f"{case.name}.mp4", lambda path, case=case: write_rotor_clip(case.rotor, path),
+               rotor_truth(case.rotor)) for case in CASES if not only or only in case.name]
+    return rendered_cases(chosen, WITHIN, 24, f"{WITHIN:.1%}")
 
 if __name__ == "__main__":
     sys.exit(main())

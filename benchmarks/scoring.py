@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from rotrate_cli.analysis import AnalysisConfig, analyze
@@ -99,6 +100,29 @@ def within_case(name: str, path: Path, truth: dict, within: float, width: int = 
     missed = row["quality"] == "good" and (error > within or not row["covers"])
     miss = f"{name}: {float(row['error_pct']):+.2f}%, covers {row['covers']}, good"
     return error <= within, miss if missed else None
+
+
+#: A rendered case: its name, its clip's path, how to render the clip (to a path given), its truth.
+RenderedCase = tuple[str, Path, Callable[[Path], object], dict]
+
+
+def rendered_cases(cases: list[RenderedCase], within: float, width: int, within_text: str) -> int:
+    """Score rendered cases in order (:func:`within_case`), rendering each clip first where it is
+    not cached (to a partial file, renamed once whole: an interrupted render is not taken for a
+    clip); the header, each line, the summary and the exit code (:func:`finish`)."""
+    print(f"{'case':<{width}} {'truth':>8} {'rotrate':>8} {SCORE_HEADER}")
+    misses, near_count = [], 0
+    for name, path, render, truth in cases:
+        if not path.exists():
+            partial = path.with_suffix(".partial" + path.suffix)
+            partial.unlink(missing_ok=True)
+            render(partial)
+            partial.replace(path)
+        near, miss = within_case(name, path, truth, within, width=width)
+        near_count += near
+        misses += [miss] if miss else []
+    return finish(f"cases {len(cases)}; within {within_text}: {near_count}; good but off or its interval missing: "
+                  f"{len(misses)}", misses)
 
 
 def finish(summary: str, misses: list[str]) -> int:
