@@ -147,6 +147,18 @@ def test_a_printed_disc_before_a_lens_its_axis_out_of_the_frame_reads_good(tmp_p
     assert any("one plane turning" in note for note in analysis.verdict.notes)
     # the plane turns its x axis towards its y axis, which the lens shows downwards: clockwise
     assert (analysis.direction, analysis.direction_in_picture) == ("cw", True)
+    # no track stands behind the rate: the plot says so, and draws no empty legend (a warning)
+    pytest.importorskip("matplotlib", reason="the plot extra (matplotlib) is not installed")
+    import warnings
+    from dataclasses import replace
+
+    from rotrate_cli.cli.plots import write_plot
+
+    trackless = replace(analysis, features=analysis.features.assign(inlier=False))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        write_plot(trackless, tmp_path / "plot.png")
+    assert (tmp_path / "plot.png").stat().st_size > 0
 
 
 def _face_on_frames(deg_per_frame: float, count: int, size: int = 240) -> list:

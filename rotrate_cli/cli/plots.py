@@ -94,7 +94,13 @@ def _tracks_panel(axes: Axes, analysis: Analysis, unit: str) -> None:
     """Each drawn feature's offsets (dots) and its fitted sinusoid at the summary rate (line)."""
     offsets = analysis.offsets
     omega = analysis.omega_rad_s
-    for number, track in enumerate(_best_features(analysis)["track"].astype(int)):
+    drawn = _best_features(analysis)["track"].astype(int)
+    if len(drawn) == 0:  # no track stands behind the rate (the picture's turning, or the return, gave it)
+        axes.text(0.5, 0.5, f"no track stands behind the rate reported (from {analysis.rate_from})",
+                  ha="center", va="center", transform=axes.transAxes, fontsize=9)
+        axes.set_axis_off()
+        return
+    for number, track in enumerate(drawn):
         part = offsets[offsets["track"] == track]
         time_s, y = part["time_s"].to_numpy(), part["offset_px"].to_numpy()
         c, s = np.cos(omega * time_s), np.sin(omega * time_s)
