@@ -212,7 +212,7 @@ HORIZON_UNIT = 1e-3
 NEAR_SIDE = 0.05
 
 
-def _affines(pairs: list[_Pair], line: np.ndarray) -> tuple[float, np.ndarray] | None:
+def _affines(stacked: _Stacked, line: np.ndarray) -> tuple[float, np.ndarray] | None:
     """Each pair's affine map (3 x 2, least squares) between its points seen from above the plane
     (the picture taken through ``line``'s horizon to infinity: ``x / (a x + b y + 1)``), each point
     weighted by its nearness squared so that residuals count nearly in the picture's px, and the
@@ -221,7 +221,6 @@ def _affines(pairs: list[_Pair], line: np.ndarray) -> tuple[float, np.ndarray] |
     taken through the horizon, the residuals shrink as a horizon brought nearer shrinks the
     picture: a disc seen face on, 0.3 px of noise, was read through a horizon 40000 px off and
     +0.25%.)"""
-    stacked = _stacked(pairs)
     near_before = stacked.before @ line + 1.0
     near_after = stacked.after @ line + 1.0
     if near_before.min() < NEAR_SIDE or near_after.min() < NEAR_SIDE:
@@ -230,7 +229,7 @@ def _affines(pairs: list[_Pair], line: np.ndarray) -> tuple[float, np.ndarray] |
     flat_after = stacked.after / near_after[:, None]
     weight = near_after ** 2
     design = np.c_[flat_before, np.ones(len(flat_before))]
-    groups = len(pairs)
+    groups = len(stacked.starts)
 
     starts = stacked.starts
 
@@ -252,7 +251,8 @@ def _affines(pairs: list[_Pair], line: np.ndarray) -> tuple[float, np.ndarray] |
 
 @dataclass(frozen=True)
 class _Stacked:
-    """The pairs' points, one pair's after the other's, where each pair's start, and whose each is."""
+    """The pairs' points, one pair's after the other's, where each pair's start, and whose each is
+    (stacked once for a search over the horizon: its every step maps them all)."""
 
     before: np.ndarray
     after: np.ndarray
@@ -260,21 +260,12 @@ class _Stacked:
     owner: np.ndarray
 
 
-_STACKS: dict[int, tuple[list[_Pair], _Stacked]] = {}
-
-
-def _stacked(pairs: list[_Pair]) -> _Stacked:
-    """The pairs' points stacked (kept for the last few lists of pairs: a search stacks them once)."""
-    key = id(pairs)
-    if key in _STACKS and _STACKS[key][0] is pairs:
-        return _STACKS[key][1]
+def _stacked(pairs: list[_Pair], backwards: bool = False) -> _Stacked:
+    """The pairs' points stacked (``backwards``: each pair's later frame's first)."""
     sizes = np.array([len(pair.before) for pair in pairs])
-    stacked = _Stacked(np.concatenate([pair.before for pair in pairs]), np.concatenate([pair.after for pair in pairs]),
-                       np.r_[0, np.cumsum(sizes)[:-1]], np.repeat(np.arange(len(pairs)), sizes))
-    if len(_STACKS) > 16:
-        _STACKS.clear()
-    _STACKS[key] = (pairs, stacked)
-    return stacked
+    before = np.concatenate([pair.after if backwards else pair.before for pair in pairs])
+    after = np.concatenate([pair.before if backwards else pair.after for pair in pairs])
+    return _Stacked(before, after, np.r_[0, np.cumsum(sizes)[:-1]], np.repeat(np.arange(len(pairs)), sizes))
 
 
 def _horizon(pairs: list[_Pair], start: np.ndarray, step: float = 0.3, budget: int = 150) -> np.ndarray:
@@ -284,8 +275,10 @@ def _horizon(pairs: list[_Pair], start: np.ndarray, step: float = 0.3, budget: i
     one horizon)."""
     from scipy.optimize import minimize  # a well-kept simplex search; imported where used (start-up)
 
+    stacked = _stacked(pairs)
+
     def cost(x: np.ndarray) -> float:
-        fitted = _affines(pairs, x * HORIZON_UNIT)
+        fitted = _affines(stacked, x * HORIZON_UNIT)
         return fitted[0] if fitted is not None else math.inf
 
     simplex = [start, start + np.array([step, 0.0]), start + np.array([0.0, step])]
@@ -301,8 +294,8 @@ def _angles(pairs: list[_Pair], line: np.ndarray) -> np.ndarray:
     read from the map's trace holds its noise as a turn: a disc seen face on turning 1.7 degrees
     a frame, 0.15 px of noise, read +0.08% so). The mean of the map fitted each way: a
     least-squares map is pulled by the noise of the points it maps from."""
-    forward = _affines(pairs, line)
-    backward = _affines([_Pair(p.second, p.first, -p.span_s, p.after, p.before, p.centre_px) for p in pairs], line)
+    forward = _affines(_stacked(pairs), line)
+    backward = _affines(_stacked(pairs, backwards=True), line)
     if forward is None or backward is None:
         return np.full(len(pairs), np.nan)
     metric = _metric(forward[1])
@@ -348,7 +341,7 @@ def _plane_map(pairs: list[_Pair], line: np.ndarray, samples: pd.DataFrame) -> P
     the horizon ``line``, each pair's affine map is a turn seen through one affine view, so one
     ellipse (``x^T M x = 1``, ``L^T M L = M`` for every map's linear part ``L``) is every map's own,
     and the axis's point is their fixed point. None where no such ellipse fits."""
-    fitted = _affines(pairs, line)
+    fitted = _affines(_stacked(pairs), line)
     if fitted is None:
         return None
     fixed = []
