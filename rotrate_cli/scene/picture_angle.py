@@ -133,6 +133,9 @@ class PictureAngle:
         plane: measured from the tracks as one plane turning (:mod:`rotrate_cli.scene.plane_turn`),
             through no view: ``view`` holds only the axis's point, and ``plane_map`` the plane's
             picture as the tracks tell it.
+        doubt: why the reading is loose (empty where it is not): a plane that the picture's own
+            changes bear out only loosely (:mod:`rotrate_cli.stages.angle`); its interval then holds
+            both readings, and a result from it is weak.
     """
 
     omega_rad_s: float
@@ -150,6 +153,7 @@ class PictureAngle:
     thin_part: bool = False
     plane: bool = False
     plane_map: PlaneMap | None = None
+    doubt: str = ""
 
 
 class AngleFrames:

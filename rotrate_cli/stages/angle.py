@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -63,34 +64,53 @@ def picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFram
     # lens, its axis out of the frame, where the view found from the picture is loose)
     samples = footage.plane_tracks if footage.plane_tracks is not None else keep_for_plane(footage.tracks)
     plane = plane_angle(samples)
-    if plane is not None and not _borne_out(plane, kept, width):
-        plane = None
+    if plane is not None:
+        plane = _weighed(plane, kept, width)
     readings = [reading for reading in (thin, changes, plane) if reading is not None]
     return min(readings, key=_half_width) if readings else None
 
 
-def _borne_out(plane: PictureAngle, kept: list[tuple[int, float, np.ndarray]], width_px: int) -> bool:
-    """True where the picture's own changes, unrolled through the plane the tracks tell
-    (:func:`rotrate_cli.scene.picture_angle.rate_through_map`), turn at the tracks' plane's rate
-    within the two intervals: tracks can follow something other than the body and fit one plane
-    turning all the same (a flat spoked wheel over a textured floor: its tracks, the floor's points
-    dragged along by the thin spokes, read -16%, the picture through their plane +12%). The
-    changes are read no more closely than the plane they are unrolled through is known (its
-    interval's half at least): a printed disc tilted 45 degrees read +0.2% +-0.9% from its tracks,
-    -0.75% +-0.1% from its changes through their plane. Changes that tell no rate of their own
-    through the plane (their interval wider than the weak one) bear nothing out: a box seen from
-    60 degrees above, its top's tracks read -1.3% +-1.1%, missing, where the box's sides change
-    the picture as no plane's turn."""
+#: A plane the picture's changes bear out only loosely is still a reading (weak, its interval
+#: holding theirs) where that interval's larger half is within this share of its rate.
+LOOSE_PLANE = 0.5
+
+
+def _weighed(plane: PictureAngle, kept: list[tuple[int, float, np.ndarray]], width_px: int) -> PictureAngle | None:
+    """The tracks' plane as the picture's own changes, unrolled through it
+    (:func:`rotrate_cli.scene.picture_angle.rate_through_map`), bear it out: as it is where they
+    turn at its rate within the two intervals; where they turn at another rate, or tell one only
+    loosely, a loose reading (weak) whose interval holds both; None where they tell none through
+    it, or one too far off (:data:`LOOSE_PLANE`).
+
+    Tracks can follow something other than the body and fit one plane turning all the same (a
+    flat spoked wheel over a textured floor: its tracks, the floor's points dragged along by the
+    thin spokes, read -16%, the picture through their plane +12%): a loose reading then, whose
+    interval holds the changes' rate. The changes are read no more closely than the plane they
+    are unrolled through is known (its interval's half at least): a printed disc tilted 45
+    degrees read +0.2% +-0.9% from its tracks, -0.75% +-0.1% from its changes through their plane.
+    Changes that tell no rate of their own through the plane (their interval wider than the weak
+    one) bear nothing out: a box seen from 60 degrees above, its top's tracks read -1.3% +-1.1%,
+    missing, where the box's sides change the picture as no plane's turn. Where the other
+    readings are looser still, a loose plane is the closest evidence there is: printed discs
+    before a 45-degree lens, their axis out of the frame and tilted 40 and 65 degrees, read +1.0%
+    and +0.2% from their planes (the changes through them -3.6% +-7% and -3.5% +-3%), against
+    +43% and +34% from the picture's changes through the view their paths tell, intervals missing."""
     if plane.plane_map is None:
-        return False
+        return None
     seen = rate_through_map(kept, plane.plane_map, width_px)
     if seen is None:
-        return False
+        return None
     rate, half = seen
-    if half > WEAK_HALF_WIDTH * rate:
-        return False  # the changes through the plane tell no rate of their own: no witness
     plane_half = 0.5 * (plane.omega_high_rad_s - plane.omega_low_rad_s)
-    return abs(rate - plane.omega_rad_s) <= math.hypot(max(half, plane_half), plane_half)
+    if half <= WEAK_HALF_WIDTH * rate and abs(rate - plane.omega_rad_s) <= math.hypot(max(half, plane_half),
+                                                                                       plane_half):
+        return plane
+    low, high = min(plane.omega_low_rad_s, rate - half), max(plane.omega_high_rad_s, rate + half)
+    loose = replace(plane, omega_low_rad_s=max(0.0, low), omega_high_rad_s=high,
+                    doubt=f"the picture's own changes, unrolled through the plane the tracks turn as one, turn at "
+                          f"{rate:.4g} rad/s within +-{half:.2g}: they bear out its {plane.omega_rad_s:.4g} rad/s only "
+                          "loosely; the 95% interval holds both")
+    return loose if _half_width(loose) <= LOOSE_PLANE else None
 
 
 def _half_width(angle: PictureAngle) -> float:

@@ -380,8 +380,8 @@ def _closer_by_angle(period: Period, omega: float, low: float, high: float,
     if _half_width(omega, low, high) <= LOOSE_RETURN and callable(angle):
         return None  # close enough: the angle (seconds to measure) would seldom be closer
     measured = angle() if callable(angle) else angle
-    if measured is None or measured.alike_deg is not None:
-        return None
+    if measured is None or measured.alike_deg is not None or measured.doubt:
+        return None  # a loose reading does not stand in for a return
     closer = (_half_width(measured.omega_rad_s, measured.omega_low_rad_s, measured.omega_high_rad_s)
               < _half_width(omega, low, high))
     agrees = measured.omega_low_rad_s <= high and low <= measured.omega_high_rad_s
@@ -544,6 +544,8 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
         elif not agrees:
             notes.append(f"the tracks read {tracks.omega_rad_s:.4g} rad/s, loosely (points that slide along "
                          "grooves or rims, or stay on reflections): they do not stand behind the rate")
+    if angle.doubt:
+        weak.append(angle.doubt)
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not weak:
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, "turning", 1, "weak" if weak else "good", tuple(weak), tuple(notes),
