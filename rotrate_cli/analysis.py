@@ -28,7 +28,7 @@ from rotrate_cli.runtime.pools import pipeline_threads
 from rotrate_cli.scene.focal import FocalEstimate
 from rotrate_cli.scene.picture_angle import PictureAngle
 from rotrate_cli.scene.plane_turn import keep_for_plane
-from rotrate_cli.scene.reasons import against_rate, name_rejections, track_places
+from rotrate_cli.scene.reasons import against_rate, name_rejections, on_plane, track_places
 from rotrate_cli.scene.sense import not_side_view, sense_of_turning
 from rotrate_cli.scene.turning import PictureTurning, picture_turning
 from rotrate_cli.scene.view import View, keep_for_view, view_from_paths
@@ -357,7 +357,12 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         # the axis the rate was measured about: the picture's turning's, not the tracks'
         geometry = replace(geometry, fixation_px=measured["angle"].view.centre_px)  # type: ignore[union-attr]
     features, tracks_used = result.features, combined.tracks_used
-    if verdict.rate_from in ("repetition", "turning"):  # the tracks shown as used are those that agree with it
+    reading = measured.get("angle")
+    if verdict.rate_from == "turning" and verdict.plane and reading is not None:
+        # the tracks on the plane stand behind its rate, whatever their one-point fits read
+        features = on_plane(features, reading.plane_tracks, verdict.omega_rad_s)
+        tracks_used = int(features["inlier"].sum())
+    elif verdict.rate_from in ("repetition", "turning"):  # the tracks shown as used are those that agree with it
         features = against_rate(features, verdict.omega_rad_s)
         tracks_used = int(features["inlier"].sum())
     if isinstance(extra.get("series"), pd.DataFrame):
@@ -371,7 +376,6 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         geometry = view_at_rate(geometry, view_tracks, verdict.omega_rad_s, verdict.rate_from, size_px)
         direction, in_picture = sense_of_turning(direction, geometry.view, view_tracks, geometry.fixation_px,
                                                  verdict.omega_rad_s)
-    reading = measured.get("angle")
     if verdict.rate_from == "turning" and verdict.plane and reading is not None:
         # the tracks' plane tells its sense as the picture shows it, through any view (its paths
         # about the axis tell none where the view read at the rate is near the side: a disc tilted

@@ -147,18 +147,39 @@ def test_a_printed_disc_before_a_lens_its_axis_out_of_the_frame_reads_good(tmp_p
     assert any("one plane turning" in note for note in analysis.verdict.notes)
     # the plane turns its x axis towards its y axis, which the lens shows downwards: clockwise
     assert (analysis.direction, analysis.direction_in_picture) == ("cw", True)
-    # no track stands behind the rate: the plot says so, and draws no empty legend (a warning)
+    # the tracks on the plane stand behind the rate: shown as used, whatever their one-point fits
+    # read (before, "0 used" beside a rate that the tracks gave)
+    used = analysis.features[analysis.features["inlier"]]
+    assert analysis.tracks_used == len(used) >= 12 and (used["reason"] == "").all()
+    # the plot says how they stand behind it, and where none does, that none does; neither draws
+    # an empty legend (a warning)
     pytest.importorskip("matplotlib", reason="the plot extra (matplotlib) is not installed")
     import warnings
     from dataclasses import replace
 
     from rotrate_cli.cli.plots import write_plot
 
-    trackless = replace(analysis, features=analysis.features.assign(inlier=False))
+    trackless = replace(analysis, features=analysis.features.assign(inlier=False),
+                        verdict=replace(analysis.verdict, plane=False))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        write_plot(trackless, tmp_path / "plot.png")
-    assert (tmp_path / "plot.png").stat().st_size > 0
+        write_plot(analysis, tmp_path / "plot.png")
+        write_plot(trackless, tmp_path / "trackless.png")
+    assert (tmp_path / "plot.png").stat().st_size > 0 and (tmp_path / "trackless.png").stat().st_size > 0
+
+
+def test_the_tracks_on_the_plane_are_the_ones_used() -> None:
+    import pandas as pd
+
+    from rotrate_cli.scene.reasons import on_plane
+
+    # features numbered from 1, the plane's tracks from 0 (the tracks table's numbers)
+    features = pd.DataFrame({"track": [1, 2, 3, 4], "omega_rad_s": [2.9, 1.0, 2.0, float("nan")],
+                             "inlier": [True, True, True, False], "reason": ["", "", "", "short"]})
+    marked = on_plane(features, (0, 3), 2.0)
+    assert marked["inlier"].tolist() == [True, False, True, True]
+    assert marked["reason"].tolist() == ["", "slides", "", ""]
+    assert on_plane(features, (), 2.0)["inlier"].tolist() == [False, False, True, False]
 
 
 def _face_on_frames(deg_per_frame: float, count: int, size: int = 240) -> list:

@@ -95,9 +95,14 @@ def _tracks_panel(axes: Axes, analysis: Analysis, unit: str) -> None:
     offsets = analysis.offsets
     omega = analysis.omega_rad_s
     drawn = _best_features(analysis)["track"].astype(int)
-    if len(drawn) == 0:  # no track stands behind the rate (the picture's turning, or the return, gave it)
-        axes.text(0.5, 0.5, f"no track stands behind the rate reported (from {analysis.rate_from})",
-                  ha="center", va="center", transform=axes.transAxes, fontsize=9)
+    plane = analysis.verdict is not None and analysis.verdict.plane
+    if len(drawn) == 0 or plane:
+        # no track stands behind the rate (the picture's turning, or the return, gave it), or its
+        # tracks stand behind it as one plane turning, not as sinusoids about one fixation
+        text = (f"{analysis.tracks_used} tracks stand behind the rate as one plane turning (through any view),\n"
+                "not as sinusoids about one fixation: see the overlay" if plane else
+                f"no track stands behind the rate reported (from {analysis.rate_from})")
+        axes.text(0.5, 0.5, text, ha="center", va="center", transform=axes.transAxes, fontsize=9)
         axes.set_axis_off()
         return
     for number, track in enumerate(drawn):

@@ -136,6 +136,8 @@ class PictureAngle:
         doubt: why the reading is loose (empty where it is not): a plane that the picture's own
             changes bear out only loosely (:mod:`rotrate_cli.stages.angle`); its interval then holds
             both readings, and a result from it is weak.
+        plane_tracks: with ``plane``, the tracks (their numbers in the tracks table) that lay on
+            the plane in the pairs of frames it was read from: those that stand behind the rate.
     """
 
     omega_rad_s: float
@@ -154,6 +156,7 @@ class PictureAngle:
     plane: bool = False
     plane_map: PlaneMap | None = None
     doubt: str = ""
+    plane_tracks: tuple[int, ...] = ()
 
 
 class AngleFrames:

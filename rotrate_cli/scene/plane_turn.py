@@ -127,9 +127,10 @@ def plane_angle(samples: pd.DataFrame) -> PictureAngle | None:
     omega = math.radians(abs(rate))
     plane_map = _plane_map(pairs, line, samples)
     view = DiscView((float(np.median(centres[near, 0])), float(np.median(centres[near, 1]))), 0.0, 0.0, math.inf)
+    on_plane = tuple(int(track) for track in np.unique(np.concatenate([pair.tracks for pair in pairs])))
     return PictureAngle(omega, max(0.0, omega - math.radians(half)), omega + math.radians(half), sense,
                         times.loc[frames].to_numpy(np.float64), chained - chained[0], turned, 1.0, view,
-                        plane=True, plane_map=plane_map)
+                        plane=True, plane_map=plane_map, plane_tracks=on_plane)
 
 
 @dataclass(frozen=True)
@@ -143,6 +144,7 @@ class _Pair:
     before: np.ndarray
     after: np.ndarray
     centre_px: np.ndarray
+    tracks: np.ndarray  # the tracks on the plane (their numbers), as ``before`` and ``after``
 
 
 def _pairs(samples: pd.DataFrame) -> list[_Pair]:
@@ -167,7 +169,8 @@ def _pairs(samples: pd.DataFrame) -> list[_Pair]:
             turn = _turn(before, after)
             if turn is not None and abs(turn[0]) <= LONGEST_DEG:
                 on = turn[2]
-                found.append(_Pair(frame, other, float(times[other] - times[frame]), before[on], after[on], turn[1]))
+                found.append(_Pair(frame, other, float(times[other] - times[frame]), before[on], after[on], turn[1],
+                                   common.to_numpy()[on]))
     return found
 
 

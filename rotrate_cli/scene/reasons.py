@@ -150,3 +150,18 @@ def against_rate(features: pd.DataFrame, omega_rad_s: float) -> pd.DataFrame:
     reason[out] = np.where(rate[out] < omega_rad_s, "slides", "disagrees")
     inlier = used & ~out
     return features.assign(inlier=inlier, reason=reason)
+
+
+def on_plane(features: pd.DataFrame, tracks: tuple[int, ...], omega_rad_s: float) -> pd.DataFrame:
+    """The features measured against the rate of the tracks ``tracks`` (numbered as the tracks
+    table, from 0) read as one plane turning (:mod:`rotrate_cli.scene.plane_turn`): those are the
+    ones used, whatever their one-point fits read (the paper's model, which a plane seen through
+    a lens is not); the others are measured against the rate as against a return
+    (:func:`against_rate`)."""
+    if features.empty or not tracks:
+        return against_rate(features, omega_rad_s)
+    plane = np.isin(features["track"].to_numpy(dtype=int) - 1, np.asarray(tracks, dtype=int))
+    others = against_rate(features.assign(inlier=features["inlier"].to_numpy(dtype=bool) & ~plane), omega_rad_s)
+    reason = others["reason"].to_numpy(dtype=object).copy()
+    reason[plane] = ""
+    return others.assign(inlier=others["inlier"].to_numpy(dtype=bool) | plane, reason=reason)
