@@ -9,6 +9,7 @@ Default settings, ``--fixation auto``.
 
     python benchmarks/bench_variants.py             # every copy of both clips
     python benchmarks/bench_variants.py --only wheel
+    python benchmarks/bench_variants.py --parts     # each copy cut under a turn (:func:`parts`)
 
 The senses: the wheel goes round anticlockwise on the screen (its hand-tracked rim sticker's
 angle falls, y down), the record clockwise (a record player turns clockwise seen from above, as
@@ -21,6 +22,7 @@ truth, or its sense is told wrong ("unknown" is not wrong); 0 otherwise; skips (
 
 from __future__ import annotations
 
+import argparse
 import json
 import re
 import sys
@@ -33,7 +35,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from benchmarks.scoring import footage_absent, only_option, part_truth  # noqa: E402
+from benchmarks.scoring import footage_absent, part_truth  # noqa: E402
 from rotrate_cli.analysis import AnalysisConfig, analyze  # noqa: E402
 from rotrate_cli.errors import RotrateError  # noqa: E402
 
@@ -137,10 +139,73 @@ def _written(clip: Path, name: str, fps: float) -> Path:
     return path
 
 
+#: The cuts of each copy under a turn (``--parts``): (start, s on the copy's own timeline; turns).
+#: 2 s on, past the wheel's still opening; 8 s on, where it has slowed 1%.
+CUTS = ((2.0, 0.3), (2.0, 0.6), (8.0, 0.9))
+
+
+def parts(only: str | None) -> int:
+    """Each copy (and each clip as it is) cut to a third, three fifths and nine tenths of a turn
+    (:data:`CUTS`), default settings: the cases a rate from part of a turn meets in other people's
+    footage. The truth is the clip's own over the part (the wheel's sticker's, on the clip's own
+    timeline: a copy played backwards is timed from its end). No bound on the error, but a
+    result called good must lie within 5% with an interval holding the truth; exits 1 otherwise."""
+    header = (f"{'clip':<24} {'copy':<22} {'part':>11} {'error':>8} {'95% interval (error)':>22} {'covers':>6} "
+              f"{'quality':>7} {'from':>10} {'s':>5}")
+    print(header)
+    print("-" * len(header))
+    errors: list[float] = []
+    runs = none = covering = good = good_off = 0
+    for stem in SENSE:
+        clip = VIDEOS / f"{stem}.mp4"
+        truth = json.loads(clip.with_suffix(".truth.json").read_text())
+        length_s = truth["frames"] / truth["fps"]
+        for name in ("as it is", *VARIANTS, *ROLLS):
+            if only and only not in f"{stem} {name}":
+                continue
+            source = clip if name == "as it is" else _written(clip, name, truth["fps"])
+            backwards = name.startswith("backwards")
+            for start_s, turns in CUTS:
+                runs += 1
+                end_s = start_s + turns * 2.0 * np.pi / truth["omega"]
+                span = (length_s - end_s, length_s - start_s) if backwards else (start_s, end_s)
+                omega = part_truth(clip, truth["omega"], truth["fps"], *span)
+                part = f"{turns:.1f} @ {start_s:g} s"
+                started = time.perf_counter()
+                try:
+                    analysis = analyze(source, AnalysisConfig(fixation_px=None, start_s=start_s, end_s=end_s))
+                except RotrateError as error:
+                    print(f"{stem:<24} {name:<22} {part:>11} {'-':>8} {'no result':>22}   {error}")
+                    none += 1
+                    continue
+                error = analysis.omega_rad_s / omega - 1.0
+                low, high = analysis.omega_low_rad_s / omega - 1.0, analysis.omega_high_rad_s / omega - 1.0
+                covers = low <= 0.0 <= high
+                errors.append(abs(error))
+                covering += covers
+                good += analysis.quality == "good"
+                good_off += analysis.quality == "good" and (abs(error) > UNMARKED_LIMIT or not covers)
+                print(f"{stem:<24} {name:<22} {part:>11} {100 * error:>+7.2f}% "
+                      f"{f'[{100 * low:+.2f}%, {100 * high:+.2f}%]':>22} {'yes' if covers else 'NO':>6} "
+                      f"{analysis.quality:>7} {analysis.rate_from:>10} {time.perf_counter() - started:>5.1f}")
+    median = 100 * float(np.median(errors)) if errors else float("nan")
+    within = sum(error <= 0.02 for error in errors)
+    print(f"\nparts {runs}; no result {none}; intervals covering the truth {covering}; good {good}; median error "
+          f"{median:.2f}%; within 2% {within}; good but off by more than {100 * UNMARKED_LIMIT:.0f}% or its interval "
+          f"missing: {good_off}")
+    return 1 if good_off else 0
+
+
 def main() -> int:
-    only = only_option(__doc__.splitlines()[0], "clips or copies")
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", default="", help="run only the clips or copies whose name contains this")
+    parser.add_argument("--parts", action="store_true", help="each copy cut under a turn instead (see parts())")
+    options = parser.parse_args()
+    only = str(options.only)
     if footage_absent(VIDEOS):
         return 0
+    if options.parts:
+        return parts(only)
     header = (f"{'clip':<24} {'copy':<22} {'omega':>8} {'error':>8} {'95% interval (error)':>22} {'covers':>6} "
               f"{'sense':>8} {'quality':>7} {'from':>10} {'s':>5}")
     print(header)

@@ -128,7 +128,10 @@ def _features_panel(axes: Axes, analysis: Analysis) -> None:
     """Every feature's rate with its 95% interval, used in blue and rejected in red; the summary
     rate and its interval as a band."""
     features = analysis.features[np.isfinite(analysis.features["omega_rad_s"])]
-    for used, colour, label in ((True, "C0", "used"), (False, "C3", "rejected")):
+    # on a plane's rate, the used tracks' own rates are their one-point fits, another model of them
+    plane = analysis.verdict is not None and analysis.verdict.plane
+    for used, colour, label in ((True, "C0", "on the plane; their one-point fits" if plane else "used"),
+                                (False, "C3", "rejected")):
         part = features[features["inlier"] == used]
         if part.empty:
             continue
@@ -145,7 +148,7 @@ def _features_panel(axes: Axes, analysis: Analysis) -> None:
         axes.set_ylim(low - margin, high + margin)
     axes.set_xlabel("feature")
     axes.set_ylabel("omega (rad/s)")
-    axes.set_title("each feature's rate with its 95% interval", fontsize=10)
+    axes.set_title("each feature's rate with its 95% interval" + (" (its one-point fit)" if plane else ""), fontsize=10)
     axes.legend(fontsize=8, loc="upper right")
     axes.grid(alpha=0.3)
 
