@@ -102,8 +102,8 @@ def _weighed(plane: PictureAngle, kept: list[tuple[int, float, np.ndarray]], wid
 
     Tracks can follow something other than the body and fit one plane turning all the same (a
     flat spoked wheel over a textured floor: its tracks, the floor's points dragged along by the
-    thin spokes, read -16%, the picture through their plane +12%): a loose reading then, whose
-    interval holds the changes' rate. The changes are read no more closely than the plane they
+    thin spokes, read -16%, the picture through their plane 34% faster, within +-18%): too loose to
+    be a reading (:data:`LOOSE_PLANE`). The changes are read no more closely than the plane they
     are unrolled through is known (its interval's half at least): a printed disc tilted 45
     degrees read +0.2% +-0.9% from its tracks, -0.75% +-0.1% from its changes through their plane.
     Changes that tell no rate of their own through the plane (their interval wider than the weak
