@@ -151,6 +151,14 @@ def test_a_printed_disc_before_a_lens_its_axis_out_of_the_frame_reads_good(tmp_p
     # read (before, "0 used" beside a rate that the tracks gave)
     used = analysis.features[analysis.features["inlier"]]
     assert analysis.tracks_used == len(used) >= 12 and (used["reason"] == "").all()
+    # the fixation reported is the plane's axis point, and the table says where it came from
+    from rich.console import Console
+
+    from rotrate_cli.cli.report import render_table
+
+    console = Console(record=True, width=200)
+    render_table(analysis, console)
+    assert "(found from the picture's turning)" in console.export_text()
     # the plot says how they stand behind it, and where none does, that none does; neither draws
     # an empty legend (a warning)
     pytest.importorskip("matplotlib", reason="the plot extra (matplotlib) is not installed")

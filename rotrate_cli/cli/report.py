@@ -235,7 +235,7 @@ def render_table(analysis: Analysis, console: Console) -> None:
     fx, fy = analysis.fixation_px
     summary.add_row("fixation", f"{fx:.1f}" + ("" if math.isnan(fy) else f", {fy:.1f}")
                     + (f" {analysis.position_unit}" if math.isnan(fy) else " px")
-                    + ("  (found from the tracks)" if analysis.axis_found else ""))
+                    + (f"  (found from {_fixation_from(analysis)})" if analysis.axis_found else ""))
     if not math.isnan(fy):
         summary.add_row("axis", f"{analysis.axis_angle_deg:+.2f} deg from vertical (top end "
                         f"{'right' if analysis.axis_angle_deg >= 0 else 'left'})"
@@ -386,3 +386,11 @@ def _direction_seen(analysis: Analysis) -> str:
     if analysis.direction_in_picture:
         return "as seen in the picture"
     return "seen from the axis's top end"
+
+
+def _fixation_from(analysis: Analysis) -> str:
+    """Where a found fixation came from: the picture's turning gives its own axis point where it
+    gives the rate (the view its changes line up through, or the plane's fixed point), else the
+    tracks."""
+    turning = analysis.verdict is not None and analysis.verdict.rate_from == "turning"
+    return "the picture's turning" if turning else "the tracks"
