@@ -180,4 +180,8 @@ def _time_panel(axes: Axes, analysis: Analysis) -> None:
         spread = finite["omega_high_rad_s"] - finite["omega_low_rad_s"]
         top = float(np.nanmax(finite["omega_rad_s"] + spread.clip(upper=analysis.omega_rad_s)))
         bottom = float(np.nanmin(finite["omega_rad_s"] - spread.clip(upper=analysis.omega_rad_s)))
+        # the reported rate and its interval stay in view where the tracks read another (a plane's
+        # rate, 3.09 rad/s, drawn off a panel of the tracks' one-point 4.1-4.6)
+        top = max(top, 1.02 * analysis.omega_high_rad_s) if math.isfinite(analysis.omega_high_rad_s) else top
+        bottom = min(bottom, 0.98 * analysis.omega_low_rad_s) if math.isfinite(analysis.omega_low_rad_s) else bottom
         axes.set_ylim(max(0.0, bottom), top)
