@@ -74,8 +74,9 @@ def test_a_chosen_point_that_does_not_move_is_rejected() -> None:
     from rotrate_cli.errors import NoResultError
 
     with pytest.raises(NoResultError, match="1 static"):
+        # its first 3 s (CSRT follows one point a frame at a time: the whole clip took 13 s)
         analyze(SAMPLES / "box_ortho.mp4", AnalysisConfig(fixation_px=(319.5, 179.5), points_px=((50.0, 50.0),),
-                                                         tracker_kind="csrt"))
+                                                         tracker_kind="csrt", end_s=3.0))
 
 
 def test_the_paths_check_is_asked_of_orthographic_fits_only(monkeypatch) -> None:
