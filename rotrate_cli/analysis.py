@@ -49,7 +49,8 @@ from rotrate_cli.stages.fits import (
 )
 from rotrate_cli.stages.geometry import Geometry, locate, measure
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
-from rotrate_cli.stages.tracks import Footage, NothingTracked, ProgressCallback, read_footage
+from rotrate_cli.stages.roll import roll_note, rolled_period
+from rotrate_cli.stages.tracks import NO_BACKGROUND_NOTE, Footage, NothingTracked, ProgressCallback, read_footage
 from rotrate_cli.stages.verdict import Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
 from rotrate_cli.stages.windows import judged_series
@@ -243,7 +244,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         # the clip's repetition (from the thumbnails alone) is worked out beside the axis's search
         # and the first fit, on the core that decoding left idle: it is first wanted where the
         # lens is chosen, else where a found axis is moved (the first fit does not wait for it)
-        repetition = pool.submit(_repetition, footage.thumbnails, footage.info.clock_resolution_s, config)
+        repetition = pool.submit(_repetition, footage.thumbnails, footage.info.clock_resolution_s, config,
+                                 footage.background_unseen)
         kept = _kept_tracks(tracks, footage.camera) if config.keep_tracks else None
         view_tracks = keep_for_view(tracks)  # the view is read at the rate reported, once it is known
         places = track_places(tracks)  # where each track lies: to name why the rejected were
@@ -317,14 +319,20 @@ def _kept_tracks(tracks: pd.DataFrame, camera: CameraPath | None = None) -> pd.D
     return kept if camera is None else camera.seen(kept)
 
 
-def _repetition(thumbnails: Thumbnails, clock_resolution_s: float, config: AnalysisConfig) -> Period | None:
+def _repetition(thumbnails: Thumbnails, clock_resolution_s: float, config: AnalysisConfig,
+                background_unseen: bool = False) -> Period | None:
     """The clip's repetition (:mod:`rotrate_cli.stages.period`) where it can stand for the body's turn:
     the fit method on automatic points (chosen points and the paper's method are measured as
     they are; several bodies do not repeat as one). Given the thumbnails alone, not the footage,
-    so that the tracks can be let go of while it runs."""
+    so that the tracks can be let go of while it runs. Where none is found and no still
+    background shows the camera's motion (``background_unseen``), it is sought with a steady
+    roll of the camera taken out (:mod:`rotrate_cli.stages.roll`)."""
     if config.method != "fit" or config.points_px or config.segment:
         return None
-    return find_period(thumbnails.times_s, thumbnails.images, clock_resolution_s)
+    found = find_period(thumbnails.times_s, thumbnails.images, clock_resolution_s)
+    if found is None and background_unseen and thumbnails.shape is not None:
+        found = rolled_period(thumbnails.times_s, thumbnails.images, thumbnails.shape, clock_resolution_s)
+    return found
 
 
 def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checked: Checked, period: Period | None,
@@ -335,6 +343,10 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     result = checked.result
     combined = result.combined
     tracks_rate = combined if combined.tracks_used > 0 else None
+    if period is not None and period.roll_deg_s:
+        # the camera rolled (the picture came back only with that taken out): the picture's
+        # turning is read with it taken out too, about an axis that then stays put
+        footage = replace(footage, pairs=footage.pairs.turned_back(period.roll_deg_s))
     measured: dict[str, PictureAngle | None] = {}
 
     def measured_angle() -> PictureAngle | None:  # once, for the verdict and omega(t)
@@ -387,6 +399,11 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         checks = (f"the tracks' own rate ({combined.omega_rad_s:.4g} rad/s) is not the one reported; "
                   f"{len(checks) + len(checked.doubts)} check(s) of it are left out",)
     warnings = footage.warnings + geometry.notes + notes + checks + verdict.notes
+    if period is not None and period.roll_deg_s and verdict.rate_from == "repetition":
+        # the picture came back once the camera's roll was taken out: that is what is said of the
+        # camera, rather than that nothing tells its motion
+        warnings = tuple(roll_note(period.roll_deg_s) if warning == NO_BACKGROUND_NOTE else warning
+                         for warning in warnings)
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
     camera = geometry.camera(size_px)

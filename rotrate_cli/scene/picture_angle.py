@@ -191,6 +191,24 @@ class AngleFrames:
             yield frame
 
 
+    def turned_back(self, roll_deg_s: float, start_s: float) -> AngleFrames:
+        """A copy whose frames are turned back about their centres by a camera's steady roll
+        (degrees a second, anticlockwise as the picture shows it) since ``start_s``."""
+        copy = AngleFrames(self._most)
+        copy._stride, copy.width_px = self._stride, self.width_px
+        copy._kept = [(index, time_s, turned_back(image, roll_deg_s * (time_s - start_s)))
+                      for index, time_s, image in self._kept]
+        return copy
+
+
+def turned_back(image: np.ndarray, roll_deg: float) -> np.ndarray:
+    """``image`` turned back about its centre by a camera's roll of ``roll_deg`` (anticlockwise as
+    shown); the corners turned in are black (alike in consecutive frames: no change there)."""
+    rows, columns = image.shape[:2]
+    matrix = cv2.getRotationMatrix2D(((columns - 1) / 2.0, (rows - 1) / 2.0), -roll_deg, 1.0)
+    return cv2.warpAffine(image, matrix, (columns, rows), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+
+
 def reduced_grey(image: np.ndarray, side_px: int = SIDE_PX) -> np.ndarray:
     """``image`` (grey or BGR) in grey, its longer side at most ``side_px``."""
     if image.ndim == 3:

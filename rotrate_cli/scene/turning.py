@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from rotrate_cli.scene.picture_angle import AngleFrames, reduced_grey
+from rotrate_cli.scene.picture_angle import AngleFrames, reduced_grey, turned_back
 from rotrate_cli.video.frames import Frame
 
 #: Pairs of consecutive frames kept over the clip (evenly spread), and their longer side, pixels.
@@ -82,6 +82,20 @@ class FramePairs:
     def pairs(self) -> list[tuple[float, np.ndarray, float, np.ndarray]]:
         """``(time_s, image, next_time_s, next_image)`` per pair kept."""
         return list(self._pairs)
+
+    def turned_back(self, roll_deg_s: float) -> FramePairs:
+        """A copy whose pictures are turned back about their centres by a camera's steady roll
+        (degrees a second, anticlockwise as the picture shows it; :mod:`rotrate_cli.stages.roll`),
+        so that the axis stays where it was."""
+        times = [pair[0] for pair in self._pairs] + [kept[1] for kept in self.angle_frames.frames]
+        start_s = min(times) if times else 0.0
+        copy = FramePairs(self._most)
+        copy._stride = self._stride
+        copy._pairs = [(time_s, turned_back(image, roll_deg_s * (time_s - start_s)), next_s,
+                        turned_back(following, roll_deg_s * (next_s - start_s)))
+                       for time_s, image, next_s, following in self._pairs]
+        copy.angle_frames = self.angle_frames.turned_back(roll_deg_s, start_s)
+        return copy
 
     def tap(self, frames: Iterator[Frame]) -> Iterator[Frame]:
         """Yield ``frames`` unchanged, keeping some pairs of consecutive ones (grey or BGR), and

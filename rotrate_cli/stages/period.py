@@ -141,6 +141,9 @@ class Period:
         sooner_s: the shortest return fitted that matched clearly less well than the one taken
             (NaN where none): the return taken may then span several repeats, those between
             spoiled (:func:`rotrate_cli.stages.verdict.judge`).
+        roll_deg_s: the camera's steady roll taken out of the pictures before the repetition was
+            found, degrees a second, anticlockwise as the picture shows it (0: none;
+            :mod:`rotrate_cli.stages.roll`).
     """
 
     period_s: float
@@ -158,6 +161,7 @@ class Period:
     turns_between: int = 1
     detrended: bool = False
     sooner_s: float = math.nan
+    roll_deg_s: float = 0.0
 
     def over(self, turns: int) -> Period:
         """The repetition where the closest return spans ``turns`` repeats."""

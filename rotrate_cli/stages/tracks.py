@@ -86,6 +86,8 @@ class Footage:
         plane_tracks: the moving tracks at some frames, kept for the plane's turning
             (:func:`rotrate_cli.scene.plane_turn.keep_for_plane`) once ``tracks`` are let go; None
             while ``tracks`` are held.
+        background_unseen: the whole picture moves, its rim too, and nothing in it stays still: a
+            camera that rolled would look the same (:data:`NO_BACKGROUND_NOTE`).
     """
 
     info: VideoInfo
@@ -101,6 +103,7 @@ class Footage:
     camera: CameraPath | None = None
     matched: bool = False
     plane_tracks: pd.DataFrame | None = None
+    background_unseen: bool = False
 
 
 class NothingTracked(NoResultError):
@@ -185,6 +188,7 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
     notes = list(run.notes) + warnings + ([] if shot is None else [shot.note])
     shake, camera = (None, None) if shaken is None else (shaken[1], shaken[0])
     keyframes.camera = camera
+    background_unseen = False
     if shake is not None:
         notes.append(_shake_note(shake))
     elif (not config.points_px and not still_background(tracks, run.frames, 1.0 / scale)
@@ -192,12 +196,14 @@ def read_footage(source: str | Path, config: AnalysisConfig, progress: ProgressC
         # all the picture moves, its rim too, and nothing in it stays still: a camera that turned
         # would look the same (the record close-up rolled 3 degrees a second read -49%)
         notes.append(NO_BACKGROUND_NOTE)
+        background_unseen = True
     if config.start_s == 0 and config.end_s is None:
         short = video.shortfall(run.frames, run.last_time_s)
         if short is not None:
             notes.append(short)
     return Footage(info, tracks, thumbnails, keyframes, pairs, run.frames, run.last_time_s - run.first_time_s,
-                   float(angle), tuple(notes), shake, camera, matched_tracks(config, info))
+                   float(angle), tuple(notes), shake, camera, matched_tracks(config, info),
+                   background_unseen=background_unseen)
 
 
 #: Said where nothing in the picture stays still to tell the camera's own motion.

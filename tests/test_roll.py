@@ -1,0 +1,76 @@
+"""The clip's repetition with a camera's steady roll taken out (:mod:`rotrate_cli.stages.roll`), on
+pictures of a textured disc seen obliquely, its picture turned by a rolling camera."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from rotrate_cli.stages.period import Thumbnails, find_period
+from rotrate_cli.stages.roll import rolled_period
+from rotrate_cli.video.frames import Frame
+
+FPS = 24.0
+
+
+def _filmed(period_s: float, roll_deg_s: float, tilt_deg: float, duration_s: float = 15.0,
+            centre: tuple[float, float] = (150.0, 70.0), seed: int = 3) -> Thumbnails:
+    """A textured disc turning once in ``period_s`` about ``centre`` (a 256x144 picture), seen
+    tilted by ``tilt_deg`` (its circles squashed across), by a camera rolling ``roll_deg_s``
+    (anticlockwise as shown) about the picture's centre; in thumbnails. The disc fills the
+    picture: nothing in it stands still."""
+    rng = np.random.default_rng(seed)
+    side = 900
+    texture = 6.0 * cv2.GaussianBlur(rng.uniform(0, 255, (side, side)).astype(np.float32), (0, 0), 10.0)
+    squash = math.cos(math.radians(tilt_deg))
+    thumbnails = Thumbnails()
+    frames = []
+    for index in range(int(duration_s * FPS)):
+        time_s = index / FPS
+        turn = cv2.getRotationMatrix2D((side / 2.0, side / 2.0), 360.0 * time_s / period_s, 1.0)
+        # the plane's view: its middle to the axis's place, squashed across
+        view = np.array([[1.0, 0.0, centre[0] - side / 2.0], [0.0, squash, centre[1] - squash * side / 2.0]])
+        camera = cv2.getRotationMatrix2D((127.5, 71.5), roll_deg_s * time_s, 1.0)
+        matrix = _then(camera, _then(view, turn))
+        image = cv2.warpAffine(texture, matrix, (256, 144), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+        frames.append(Frame(index, time_s, (image - image.mean() + 128.0).clip(0, 255).astype(np.uint8)))
+    for _ in thumbnails.tap(iter(frames)):
+        pass
+    return thumbnails
+
+
+def _then(second: np.ndarray, first: np.ndarray) -> np.ndarray:
+    """The affine map ``first`` then ``second`` (2x3 each)."""
+    return (np.vstack([second, [0.0, 0.0, 1.0]]) @ np.vstack([first, [0.0, 0.0, 1.0]]))[:2]
+
+
+@pytest.mark.parametrize("roll_deg_s", [3.0, -4.0])
+def test_a_rolling_camera_s_roll_is_found_and_the_return_times_the_turn(roll_deg_s: float) -> None:
+    """Seen tilted 65 degrees, the disc's picture comes back each turn turned by the camera's roll
+    over it: no return. Turned back by the roll found, it comes back at the disc's own rate."""
+    thumbnails = _filmed(3.0, roll_deg_s, 65.0)
+    assert thumbnails.shape is not None
+    assert find_period(thumbnails.times_s, thumbnails.images) is None
+    found = rolled_period(thumbnails.times_s, thumbnails.images, thumbnails.shape)
+    assert found is not None
+    assert found.roll_deg_s == pytest.approx(roll_deg_s, abs=0.5)
+    assert found.period_s == pytest.approx(3.0, rel=0.005)
+    assert found.period_low_s <= 3.0 <= found.period_high_s
+
+
+def test_a_disc_face_on_about_the_middle_tells_no_roll() -> None:
+    """Face on about the picture's centre, the camera's turn and the disc's are one: turned back by
+    any roll the picture comes back, at another rate. No roll is pinned, and none is taken (the
+    plain return reads the two turns together)."""
+    thumbnails = _filmed(3.0, 3.0, 0.0, centre=(127.5, 71.5))
+    assert thumbnails.shape is not None
+    assert rolled_period(thumbnails.times_s, thumbnails.images, thumbnails.shape) is None
+
+
+def test_a_picture_under_a_turn_has_no_rolled_return() -> None:
+    thumbnails = _filmed(20.0, 3.0, 65.0, duration_s=8.0)
+    assert thumbnails.shape is not None
+    assert rolled_period(thumbnails.times_s, thumbnails.images, thumbnails.shape) is None
