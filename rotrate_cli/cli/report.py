@@ -167,6 +167,7 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "far_apart": analysis.period.far_apart,
             "turns_between": analysis.period.turns_between,
             "detrended": analysis.period.detrended,
+            "roll_deg_s": _number(analysis.period.roll_deg_s, 3),
         },
         "shake": None if analysis.shake is None else {
             "rms_px": _number(analysis.shake.rms_px, 3), "largest_px": _number(analysis.shake.largest_px, 3),
