@@ -380,7 +380,8 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     if isinstance(extra.get("series"), pd.DataFrame):
         extra["series"] = judged_series(extra["series"], verdict, footage.thumbnails,  # type: ignore[arg-type]
                                         footage.info.clock_resolution_s, config.window_s or 0.0,
-                                        angle_windows(footage, measured_angle))
+                                        angle_windows(footage, measured_angle),
+                                        roll_deg_s=period.roll_deg_s if period is not None else 0.0)
     footage.pairs.clear()
     size_px = (footage.info.width_px, footage.info.height_px)
     direction, in_picture = result.direction, False

@@ -553,9 +553,12 @@ def test_the_record_filmed_by_a_rolling_camera_comes_back_once_the_roll_is_taken
     reader.release()
     assert writer is not None
     writer.release()
-    analysis = analyze(out, AnalysisConfig(fixation_px=None))
+    analysis = analyze(out, AnalysisConfig(fixation_px=None, window_s=4.0))
     assert analysis.rate_from == "repetition"
     assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.005)
+    # omega(t) from the same source: each window's return, the roll taken out of it too
+    assert analysis.series is not None and (analysis.series["rate_from"] == "repetition").all()
+    assert np.allclose(analysis.series["omega_rad_s"], truth["omega"], rtol=0.01)
     assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
     assert analysis.period is not None and analysis.period.roll_deg_s == pytest.approx(-3.0, abs=0.3)
     assert [w for w in analysis.warnings if "rolling 3.00 degrees a second (clockwise" in w]

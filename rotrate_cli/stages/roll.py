@@ -67,7 +67,7 @@ def rolled_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int
     def tried(roll: float) -> Period | None:
         roll = round(roll, 3)
         if roll not in found:
-            found[roll] = find_period(times_s, _turned_back(times_s, images, shape, roll), clock_resolution_s)
+            found[roll] = find_period(times_s, turned_back(times_s, images, shape, roll), clock_resolution_s)
         return found[roll]
 
     for size in ROLLS_DEG_S:
@@ -107,8 +107,9 @@ def _best(found: dict[float, Period | None]) -> float | None:
     return min(rolls, key=lambda roll: found[roll].likeness)  # type: ignore[union-attr]
 
 
-def _turned_back(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int], roll_deg_s: float) -> np.ndarray:
-    """Each thumbnail turned back about its centre by ``roll_deg_s`` times its time since the first."""
+def turned_back(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int], roll_deg_s: float) -> np.ndarray:
+    """Each thumbnail (one row of pixels, ``shape`` its rows and columns) turned back about its
+    centre by ``roll_deg_s`` times its time since the first."""
     rows, columns = shape
     centre = ((columns - 1) / 2.0, (rows - 1) / 2.0)
     turned = np.empty_like(images)
