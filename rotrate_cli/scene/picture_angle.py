@@ -201,12 +201,13 @@ class AngleFrames:
         return copy
 
 
-def turned_back(image: np.ndarray, roll_deg: float) -> np.ndarray:
+def turned_back(image: np.ndarray, roll_deg: float, border: int = cv2.BORDER_CONSTANT) -> np.ndarray:
     """``image`` turned back about its centre by a camera's roll of ``roll_deg`` (anticlockwise as
-    shown); the corners turned in are black (alike in consecutive frames: no change there)."""
+    shown). The corners turned in are black by default (alike in consecutive frames: no change
+    there); ``border``: OpenCV's rule for them otherwise."""
     rows, columns = image.shape[:2]
     matrix = cv2.getRotationMatrix2D(((columns - 1) / 2.0, (rows - 1) / 2.0), -roll_deg, 1.0)
-    return cv2.warpAffine(image, matrix, (columns, rows), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+    return cv2.warpAffine(image, matrix, (columns, rows), flags=cv2.INTER_LINEAR, borderMode=border)
 
 
 def reduced_grey(image: np.ndarray, side_px: int = SIDE_PX) -> np.ndarray:

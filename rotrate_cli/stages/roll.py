@@ -13,8 +13,8 @@ plain repetition finds nothing and no still background shows, the thumbnails are
 about their centre by a steady roll, tried over :data:`ROLLS_DEG_S` either way, and the
 repetition sought in each; the roll whose repetition matches best is refined to a fraction of a
 degree a second. It is taken only where it is pinned: the repetitions a couple of degrees a
-second either side of it come back clearly less often and match worse, or are not found. A disc seen face on about the
-picture's centre is not pinned (turned back by any roll, it comes back at another rate: its
+second either side of it come back clearly less often and match worse, or are not found. A disc
+seen face on about the picture's centre is not pinned (turned back by any roll, it comes back at another rate: its
 turn and the camera's are one), and nothing is taken. The rate's interval holds the rates of
 the rolls that match nearly as well.
 
@@ -31,6 +31,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
+from rotrate_cli.scene.picture_angle import turned_back as turned_back_picture
 from rotrate_cli.stages.period import Period, find_period
 
 #: The steady rolls tried first, degrees a second (each either way): a camera on a head turned by
@@ -109,14 +110,12 @@ def _best(found: dict[float, Period | None]) -> float | None:
 
 def turned_back(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int], roll_deg_s: float) -> np.ndarray:
     """Each thumbnail (one row of pixels, ``shape`` its rows and columns) turned back about its
-    centre by ``roll_deg_s`` times its time since the first."""
-    rows, columns = shape
-    centre = ((columns - 1) / 2.0, (rows - 1) / 2.0)
+    centre by ``roll_deg_s`` times its time since the first (the corners turned in repeat the
+    picture's edge: black corners read as a change where the period compares whole pictures)."""
     turned = np.empty_like(images)
     for k, time_s in enumerate(times_s):
-        matrix = cv2.getRotationMatrix2D(centre, -roll_deg_s * (time_s - times_s[0]), 1.0)
-        turned[k] = cv2.warpAffine(images[k].reshape(rows, columns), matrix, (columns, rows), flags=cv2.INTER_LINEAR,
-                                   borderMode=cv2.BORDER_REPLICATE).ravel()
+        turned[k] = turned_back_picture(images[k].reshape(shape), roll_deg_s * (time_s - times_s[0]),
+                                        cv2.BORDER_REPLICATE).ravel()
     return turned
 
 
