@@ -345,8 +345,12 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     tracks_rate = combined if combined.tracks_used > 0 else None
     if period is not None and period.roll_deg_s:
         # the camera rolled (the picture came back only with that taken out): the picture's
-        # turning is read with it taken out too, about an axis that then stays put
+        # turning is read with it taken out too, about an axis that then stays put; the tracks,
+        # followed in the rolling picture with nothing still to take the roll out of them, are no
+        # evidence of the count of returns a turn (the rolled record's first 12 s: three tracks
+        # on its sliding label told 2, and the result was half the truth, its interval missing)
         footage = replace(footage, pairs=footage.pairs.turned_back(period.roll_deg_s))
+        tracks_rate = None
     measured: dict[str, PictureAngle | None] = {}
 
     def measured_angle() -> PictureAngle | None:  # once, for the verdict and omega(t)
