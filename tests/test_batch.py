@@ -112,6 +112,7 @@ def test_existing_detail_reports_are_kept_without_force(tmp_path: Path) -> None:
     assert not (tmp_path / "cylinder_ortho.json").exists()  # refused before running anything
 
 
+@pytest.mark.slow  # about 10 s: in make test-slow (each sample stays in test_samples, JUnit in the failing manifest)
 def test_the_sample_manifest_passes_and_writes_junit(tmp_path: Path) -> None:
     junit = tmp_path / "junit.xml"
     result = runner.invoke(app, ["check", str(SAMPLES / "manifest.csv"), "--junit", str(junit)])

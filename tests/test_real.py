@@ -20,10 +20,10 @@ CARS = SHARED / "data" / "epfl_cars"
 VIDEOS = SHARED / "data" / "real_videos"
 
 
-# seq02 in EXIF's seconds takes 12 s, seq10 by frames 7 s: make test-slow (EXIF's clock stays in
-# seq10, the frames' in seq02)
+# seq02 in EXIF's seconds takes 12 s, seq10 by frames 7 s and by EXIF 8 s: make test-slow (the frames'
+# clock stays in seq02; EXIF's in the parts of seq02 below)
 @pytest.mark.parametrize(("clock", "sequence"), [("fps", "seq02"), pytest.param("fps", "seq10", marks=pytest.mark.slow),
-                                                 ("exif", "seq10"),
+                                                 pytest.param("exif", "seq10", marks=pytest.mark.slow),
                                                  pytest.param("exif", "seq02", marks=pytest.mark.slow)])
 def test_epfl_car_on_a_turntable(sequence: str, clock: str) -> None:
     folder = CARS / sequence
@@ -49,9 +49,10 @@ def test_epfl_car_on_a_turntable(sequence: str, clock: str) -> None:
     assert analysis.camera_from == "exif"  # the lens from the photographs
 
 
-# seq04's (about 10 s) in make test-slow: the axis's settling stays tested on seq10 and seq02
+# seq04's (about 10 s) and seq10's in make test-slow: the axis's settling stays tested on seq02
 @pytest.mark.parametrize(("sequence", "first", "count", "within"), [
-    ("seq10", 15, 50, 0.02),  # +5.6% within [+4.4%, +7.0%], good, its axis 7 px aside
+    # +5.6% within [+4.4%, +7.0%], good, its axis 7 px aside (6 s: make test-slow)
+    pytest.param("seq10", 15, 50, 0.02, marks=pytest.mark.slow),
     ("seq02", 30, 30, 0.02),  # -5.4% within [-6.3%, -4.4%], good
     # settled, -3.6% within [-4.4%, -2.8%] before the coupling's gain
     pytest.param("seq04", 60, 30, 0.05, marks=pytest.mark.slow),
@@ -370,6 +371,7 @@ def _wheel_turned(clip: Path, out: Path, turn: int | None, flip: bool, size: flo
     return out
 
 
+@pytest.mark.slow  # about 10 s: in make test-slow (the wheel's and the record's sense as they are stay)
 def test_the_face_on_wheel_turns_the_way_its_sticker_does_however_the_picture_is_held(tmp_path: Path) -> None:
     """Face on, the sense is the one the wheel goes round in the picture. Its hand-tracked rim
     sticker goes round the axle anticlockwise on the screen (its angle, y down, falls). The side

@@ -67,8 +67,9 @@ def test_two_rendered_bodies_are_measured_each_within_two_percent() -> None:
 
 
 @pytest.mark.parametrize(("clip", "options"), [
-    ("box_ortho", {}),
-    pytest.param("box_perspective", {"fov_deg": 25.0}, marks=pytest.mark.slow),  # make test-slow
+    # both in make test-slow (7 s and more): a body split in two stays tested by the two bodies' clip
+    pytest.param("box_ortho", {}, marks=pytest.mark.slow),
+    pytest.param("box_perspective", {"fov_deg": 25.0}, marks=pytest.mark.slow),
 ])
 def test_a_single_body_clip_segments_into_one_body(clip: str, options: dict) -> None:
     path = SAMPLES / f"{clip}.mp4"

@@ -76,7 +76,8 @@ def test_a_still_clip_is_no_cut() -> None:
     assert cuts(frames) == []
 
 
-@pytest.mark.parametrize("opening", ["still", "black"])
+# a still opening in make test-slow (6 s): the black one stays
+@pytest.mark.parametrize("opening", [pytest.param("still", marks=pytest.mark.slow), "black"])
 def test_a_clip_that_opens_on_another_picture_is_measured_on_its_turning(tmp_path, opening: str) -> None:
     """A calibration still before the turning starts (the real bicycle wheel's first frame), or
     half a second of black: the tracks seeded on it and the repetition read across it spoilt the
