@@ -49,7 +49,7 @@ from rotrate_cli.stages.fits import (
 )
 from rotrate_cli.stages.geometry import Geometry, locate, measure
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
-from rotrate_cli.stages.roll import roll_note, rolled_period
+from rotrate_cli.stages.roll import roll_note, sway_note, unsteady_camera_period
 from rotrate_cli.stages.tracks import NO_BACKGROUND_NOTE, Footage, NothingTracked, ProgressCallback, read_footage
 from rotrate_cli.stages.verdict import Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
@@ -326,12 +326,13 @@ def _repetition(thumbnails: Thumbnails, clock_resolution_s: float, config: Analy
     they are; several bodies do not repeat as one). Given the thumbnails alone, not the footage,
     so that the tracks can be let go of while it runs. Where none is found and no still
     background shows the camera's motion (``background_unseen``), it is sought with a steady
-    roll of the camera taken out (:mod:`rotrate_cli.stages.roll`)."""
+    roll of the camera taken out, or allowing the camera a sway (:mod:`rotrate_cli.stages.roll`)."""
     if config.method != "fit" or config.points_px or config.segment:
         return None
     found = find_period(thumbnails.times_s, thumbnails.images, clock_resolution_s)
-    if found is None and background_unseen and thumbnails.shape is not None:
-        found = rolled_period(thumbnails.times_s, thumbnails.images, thumbnails.shape, clock_resolution_s)
+    if background_unseen and thumbnails.shape is not None:
+        found = unsteady_camera_period(thumbnails.times_s, thumbnails.images, thumbnails.shape, clock_resolution_s,
+                                       found)
     return found
 
 
@@ -345,11 +346,13 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     tracks_rate = combined if combined.tracks_used > 0 else None
     if period is not None and period.roll_deg_s:
         # the camera rolled (the picture came back only with that taken out): the picture's
-        # turning is read with it taken out too, about an axis that then stays put; the tracks,
-        # followed in the rolling picture with nothing still to take the roll out of them, are no
-        # evidence of the count of returns a turn (the rolled record's first 12 s: three tracks
-        # on its sliding label told 2, and the result was half the truth, its interval missing)
+        # turning is read with it taken out too, about an axis that then stays put
         footage = replace(footage, pairs=footage.pairs.turned_back(period.roll_deg_s))
+    if period is not None and (period.roll_deg_s or period.sway_deg):
+        # the tracks, followed in the rolling or swaying picture with nothing still to take the
+        # camera's motion out of them, are no evidence of the count of returns a turn (the rolled
+        # record's first 12 s: three tracks on its sliding label told 2, and the result was half
+        # the truth, its interval missing)
         tracks_rate = None
     measured: dict[str, PictureAngle | None] = {}
 
@@ -385,7 +388,8 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         extra["series"] = judged_series(extra["series"], verdict, footage.thumbnails,  # type: ignore[arg-type]
                                         footage.info.clock_resolution_s, config.window_s or 0.0,
                                         angle_windows(footage, measured_angle),
-                                        roll_deg_s=period.roll_deg_s if period is not None else 0.0)
+                                        roll_deg_s=period.roll_deg_s if period is not None else 0.0,
+                                        sway_deg=period.sway_deg if period is not None else 0.0)
     footage.pairs.clear()
     size_px = (footage.info.width_px, footage.info.height_px)
     direction, in_picture = result.direction, False
@@ -404,11 +408,11 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         checks = (f"the tracks' own rate ({combined.omega_rad_s:.4g} rad/s) is not the one reported; "
                   f"{len(checks) + len(checked.doubts)} check(s) of it are left out",)
     warnings = footage.warnings + geometry.notes + notes + checks + verdict.notes
-    if period is not None and period.roll_deg_s and verdict.rate_from == "repetition":
-        # the picture came back once the camera's roll was taken out: that is what is said of the
-        # camera, rather than that nothing tells its motion
-        warnings = tuple(roll_note(period.roll_deg_s) if warning == NO_BACKGROUND_NOTE else warning
-                         for warning in warnings)
+    if period is not None and (period.roll_deg_s or period.sway_deg) and verdict.rate_from == "repetition":
+        # the picture came back once the camera's roll was taken out (or its sway allowed): that
+        # is what is said of the camera, rather than that nothing tells its motion
+        said = sway_note(period) if period.sway_deg else roll_note(period.roll_deg_s)
+        warnings = tuple(said if warning == NO_BACKGROUND_NOTE else warning for warning in warnings)
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
     camera = geometry.camera(size_px)

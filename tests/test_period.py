@@ -378,9 +378,9 @@ def test_a_stepped_hand_s_single_return_is_placed_no_finer_than_its_step(fps: fl
 
 
 def test_a_smooth_turn_holds_no_step_and_a_stepped_one_its_own() -> None:
-    from rotrate_cli.stages.period import _differences, _hold_s
+    from rotrate_cli.stages.period import _hold_s, pixel_differences
     times = np.arange(0.0, 8.0, 1 / 23.976)
     smooth = _turning(times, 1.7696)
-    assert _hold_s(_differences(smooth.images).diagonal(1), smooth.times_s) == 0.0
+    assert _hold_s(pixel_differences(smooth.images).diagonal(1), smooth.times_s) == 0.0
     stepped, _ = _stepping_hand(25.0, 0.3)
-    assert _hold_s(_differences(stepped.images).diagonal(1), stepped.times_s) == pytest.approx(0.5, abs=0.05)
+    assert _hold_s(pixel_differences(stepped.images).diagonal(1), stepped.times_s) == pytest.approx(0.5, abs=0.05)

@@ -36,7 +36,7 @@ picture's own turning tell which (:func:`rotrate_cli.stages.verdict.tell_repeats
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 
 import cv2
@@ -144,6 +144,9 @@ class Period:
         roll_deg_s: the camera's steady roll taken out of the pictures before the repetition was
             found, degrees a second, anticlockwise as the picture shows it (0: none;
             :mod:`rotrate_cli.stages.roll`).
+        sway_deg: the turn of the whole picture, degrees either way, that two pictures were
+            allowed to differ by and still count as the same (0: none): a camera that sways in the
+            hand, with no still background to measure it by (:mod:`rotrate_cli.stages.roll`).
     """
 
     period_s: float
@@ -162,6 +165,7 @@ class Period:
     detrended: bool = False
     sooner_s: float = math.nan
     roll_deg_s: float = 0.0
+    sway_deg: float = 0.0
 
     def over(self, turns: int) -> Period:
         """The repetition where the closest return spans ``turns`` repeats."""
@@ -258,9 +262,9 @@ class Thumbnails:
         return np.stack(self._images) if self._images else np.zeros((0, 0), np.uint8)
 
 
-def _differences(images: np.ndarray) -> np.ndarray:
-    """Squared differences of every pair of frames, after the pixels' mean is removed, over the
-    :data:`MOST_PIXELS` pixels that change most (still background adds only noise)."""
+def changing_pixels(images: np.ndarray) -> tuple[np.ndarray | None, np.ndarray]:
+    """The :data:`MOST_PIXELS` pixels (columns of ``images``) that change most over the clip
+    (None: all of them, where there are no more), and every pixel's mean."""
     count = len(images)
     total = np.zeros(images.shape[1], np.float64)
     squares = np.zeros(images.shape[1], np.float64)
@@ -269,16 +273,28 @@ def _differences(images: np.ndarray) -> np.ndarray:
         total += block.sum(axis=0)
         squares += (block * block).sum(axis=0)
     variance = squares / count - (total / count) ** 2
-    if images.shape[1] > MOST_PIXELS:
-        pixels = np.sort(np.argpartition(variance, -MOST_PIXELS)[-MOST_PIXELS:])
-        images, total = images[:, pixels], total[pixels]
+    if images.shape[1] <= MOST_PIXELS:
+        return None, total / count
+    return np.sort(np.argpartition(variance, -MOST_PIXELS)[-MOST_PIXELS:]), total / count
+
+
+def pixel_differences(images: np.ndarray) -> np.ndarray:
+    """Squared differences of every pair of frames, after the pixels' mean is removed, over the
+    :data:`MOST_PIXELS` pixels that change most (still background adds only noise)."""
+    pixels, mean = changing_pixels(images)
+    if pixels is not None:
+        images, mean = images[:, pixels], mean[pixels]
     values = images.astype(np.float32)
-    values -= (total / count).astype(np.float32)
-    energy = np.einsum("ij,ij->i", values, values)
-    gram = values @ values.T
+    values -= mean.astype(np.float32)
+    return squared_differences(values, values)
+
+
+def squared_differences(first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """``|first[i] - second[j]|^2`` for every pair of rows, from one matrix product (float32)."""
+    gram = first @ second.T
     gram *= -2.0
-    gram += energy[:, None]
-    gram += energy[None, :]
+    gram += np.einsum("ij,ij->i", first, first)[:, None]
+    gram += np.einsum("ij,ij->i", second, second)[None, :]
     return np.maximum(gram, 0.0, out=gram)
 
 
@@ -340,21 +356,29 @@ def _repeats(profile: np.ndarray, lag0: float, reach: int) -> int:
         k += 1
 
 
-def find_period(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float = 0.0) -> Period | None:
+#: The squared differences of every pair of frames, given their thumbnails (one row each).
+Differences = Callable[[np.ndarray], np.ndarray]
+
+
+def find_period(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float = 0.0,
+                differences: Differences | None = None) -> Period | None:
     """The time after which the clip's pictures repeat (see the module's notes); None when the
     clip does not come back to a picture it has shown (under about a turn, or nothing turns).
 
     ``times_s``: each frame's time; ``images``: one row of thumbnail pixels per frame;
-    ``clock_resolution_s``: how finely the times are known (widens the interval).
+    ``clock_resolution_s``: how finely the times are known (widens the interval);
+    ``differences``: how two frames' pictures differ (by default their squared difference over the
+    pixels that change most, :func:`pixel_differences`).
 
     Searched on the frames as they are, then, where that finds nothing, on the frames less their
     slow change (:func:`_detrended`).
     """
-    found = _search(times_s, images, clock_resolution_s)
+    differences = differences or pixel_differences
+    found = _search(times_s, images, clock_resolution_s, differences)
     if found is not None or len(times_s) < 4 * DETREND_FRAMES:
         return found
     times_s, images = _detrended(times_s, images)
-    found = _search(times_s, images, clock_resolution_s)
+    found = _search(times_s, images, clock_resolution_s, differences)
     return None if found is None else replace(found, detrended=True)
 
 
@@ -369,7 +393,8 @@ def _detrended(times_s: np.ndarray, images: np.ndarray) -> tuple[np.ndarray, np.
     return times_s[half:half + len(means)], images[half:half + len(means)].astype(np.float32) - means
 
 
-def _search(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float) -> Period | None:
+def _search(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float,
+            differences: Differences = pixel_differences) -> Period | None:
     """The repetition in one set of thumbnails (see :func:`find_period`).
 
     Every valley of the lag profile (and the closing of a single turn) is fitted; the period is
@@ -382,7 +407,7 @@ def _search(times_s: np.ndarray, images: np.ndarray, clock_resolution_s: float) 
     steps = np.diff(times_s)
     if not (steps > 0).all():
         return None
-    diff = _differences(images)
+    diff = differences(images)
     rows = diff[::max(1, count // 400)]  # a few hundred frames' differences tell the typical one
     typical = float(np.median(rows[rows > 0])) if (rows > 0).any() else 0.0
     if not typical > 0:

@@ -13,26 +13,38 @@ plain repetition finds nothing and no still background shows, the thumbnails are
 about their centre by a steady roll, tried over :data:`ROLLS_DEG_S` either way, and the
 repetition sought in each; the roll whose repetition matches best is refined to a fraction of a
 degree a second. It is taken only where it is pinned: the repetitions a couple of degrees a
-second either side of it come back clearly less often and match worse, or are not found. A disc
+second either side of it come back clearly less often or match clearly worse, or are not found.
+Only the circle inscribed in the thumbnails is compared (:func:`turned_back`). A disc
 seen face on about the picture's centre is not pinned (turned back by any roll, it comes back at another rate: its
 turn and the camera's are one), and nothing is taken. The rate's interval holds the rates of
 the rolls that match nearly as well.
 
 A hand's wobble is not a steady roll: turned back by its mean roll, the picture still sways by a
 degree or two, and may line up once by chance; a roll is believed only where the picture then
-comes back several times (:data:`MIN_REPEATS`). The shared record rolled and wobbling reads no
-roll.
+comes back several times (:data:`MIN_REPEATS`).
+
+So where neither finds a return, two pictures are allowed to differ by a small turn of the whole
+picture about its centre (:data:`SWAY_DEG` either way) and still count as the same
+(:func:`swayed_period`): a camera that sways in the hand turns the picture by a degree or two
+back and forth, and the body's turn does not line up with that. The shared record, its picture
+swaying 1.5 and 0.4 degrees at 0.9 and 2.3 Hz with a 4-pixel shake (no still background): plainly
+its picture came back only where the sway lined up too, after five turns (-80%, weak); allowed the
+sway, after each turn, 13 times, -0.01%. Rolled 3 degrees a second as well, the roll is sought as
+above with the sway allowed. A turn of the whole picture about its centre can stand in for the
+body's own only where the body turns about the centre seen face on; there the plain return finds
+it, and this is not tried.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import cv2
 import numpy as np
 
 from rotrate_cli.scene.picture_angle import turned_back as turned_back_picture
-from rotrate_cli.stages.period import Period, find_period
+from rotrate_cli.stages.period import Differences, Period, changing_pixels, find_period, squared_differences
 
 #: The steady rolls tried first, degrees a second (each either way): a camera on a head turned by
 #: hand, or drifting in the hand, rolls a few degrees a second at most.
@@ -40,11 +52,13 @@ ROLLS_DEG_S = (1.0, 2.0, 3.0, 4.5, 6.0, 8.0)
 #: The best is refined by these steps either side (degrees a second), in turn.
 REFINE_STEPS_DEG_S = (0.5, 0.25)
 #: Pinned: the repetitions this far either side (degrees a second) come back at most half as
-#: often and match at best this share as well (their likeness, a difference, at least 1 / PINNED
-#: of the best's), or are not found. The rolled record: 6 times at 0.29 at 3 degrees a second,
-#: once at 0.41 at 1 and 5; a disc face on about the picture's middle, 5 times at every roll.
+#: often, or match clearly worse (their likeness, a difference, at least LESS_ALIKE above the
+#: best's), or are not found. A disc face on about the picture's middle comes back as often and
+#: as nearly alike at every roll (5 times, likeness 0.002-0.008); the rolled record came back 14
+#: times at 0.14 at 3 degrees a second, twice at 0.34 at 1 and 5; a tilted disc rolled 3 degrees a
+#: second, 5 times at 0.003, and 3 times at 0.29 at 1.
 PINNED_APART_DEG_S = 2.0
-PINNED = 0.85
+LESS_ALIKE = 0.1
 #: The rolls whose repetitions match within this factor of the best's likeness are held by the
 #: interval.
 NEARLY_AS_ALIKE = 1.1
@@ -53,14 +67,22 @@ NEARLY_AS_ALIKE = 1.1
 #: (the rolled and wobbling record came back once, after two turns: -50%; the steadily rolled one
 #: six times).
 MIN_REPEATS = 3
+#: A sway allowed: each picture turned about its centre by up to this many degrees either way, in
+#: steps of SWAY_STEP_DEG (a 64-pixel thumbnail's corner moves a third of a pixel in half a step).
+#: A hand holding a camera sways it by a degree or two (the record swayed 1.9 at most).
+SWAY_DEG = 3.0
+SWAY_STEP_DEG = 1.0
+#: The sway is sought over the first this many frames only: its differences cost as many matrix
+#: products as sway steps (600 frames, 7 steps: about half a second).
+SWAY_FRAMES = 600
 
 
 def rolled_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int],
-                  clock_resolution_s: float = 0.0) -> Period | None:
+                  clock_resolution_s: float = 0.0, differences: Differences | None = None) -> Period | None:
     """The clip's repetition with a steady camera roll taken out (see the module's notes; its
     ``roll_deg_s``, anticlockwise as the picture shows it); None where no roll gives one, or the
     roll is not pinned. ``images``: one row of thumbnail pixels per frame, ``shape`` their rows
-    and columns."""
+    and columns; ``differences``: how pictures are compared (:func:`rotrate_cli.stages.period.find_period`)."""
     if len(times_s) < 8 or images.size == 0:
         return None
     found: dict[float, Period | None] = {}
@@ -68,7 +90,8 @@ def rolled_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int
     def tried(roll: float) -> Period | None:
         roll = round(roll, 3)
         if roll not in found:
-            found[roll] = find_period(times_s, turned_back(times_s, images, shape, roll), clock_resolution_s)
+            found[roll] = find_period(times_s, turned_back(times_s, images, shape, roll), clock_resolution_s,
+                                      differences)
         return found[roll]
 
     for size in ROLLS_DEG_S:
@@ -90,14 +113,83 @@ def rolled_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int
     # and less alike, or not at all (face on about the middle, every roll comes back as often)
     for side in (-1.0, 1.0):
         other = tried(best + side * PINNED_APART_DEG_S)
-        if other is not None and (other.repeats > period.repeats / 2 or period.likeness > PINNED * other.likeness):
+        if other is not None and other.repeats > period.repeats / 2 and other.likeness < period.likeness + LESS_ALIKE:
             return None
-    # the interval holds the rates of the rolls that match nearly as well
+    # the interval holds the rates of the rolls that match nearly as well, where they come back
+    # after as many turns (the rolled and swaying record: a roll near its best came back after two)
     near = [p for roll, p in found.items() if p is not None and abs(roll - best) < PINNED_APART_DEG_S
-            and p.likeness <= NEARLY_AS_ALIKE * period.likeness]
+            and p.likeness <= NEARLY_AS_ALIKE * period.likeness and abs(p.period_s / period.period_s - 1.0) < 0.5]
     low_s = min(p.period_low_s for p in near)
     high_s = max(p.period_high_s for p in near)
     return replace(period, period_low_s=low_s, period_high_s=high_s, roll_deg_s=best)
+
+
+def unsteady_camera_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int],
+                           clock_resolution_s: float, plain: Period | None) -> Period | None:
+    """The clip's repetition where no still background shows the camera's motion, given the
+    plain one (``plain``, :func:`rotrate_cli.stages.period.find_period`; None where it found none):
+    where it found none, sought with a steady roll taken out (:func:`rolled_period`), then allowing
+    a sway (:func:`swayed_period`); where it found one but also a sooner return that matched
+    less well (:attr:`Period.sooner_s`: the return taken may span several turns, those between
+    spoiled), the sway's return where it comes back more often and the plain one spans a whole
+    number of it (the swaying record came back plainly only after five turns, where the sway
+    lined up as well)."""
+    if plain is None:
+        return (rolled_period(times_s, images, shape, clock_resolution_s)
+                or swayed_period(times_s, images, shape, clock_resolution_s))
+    if not math.isfinite(plain.sooner_s):
+        return plain
+    swayed = swayed_period(times_s, images, shape, clock_resolution_s)
+    if swayed is None or swayed.repeats <= plain.repeats:
+        return plain
+    spans = round(plain.period_s / swayed.period_s)
+    if spans >= 2 and abs(plain.period_s / (spans * swayed.period_s) - 1.0) <= SPANS_WITHIN:
+        return swayed
+    return plain
+
+
+#: A plain return spans a whole number of the sway's returns where it lies within this share of it.
+SPANS_WITHIN = 0.02
+
+
+def swayed_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int],
+                  clock_resolution_s: float = 0.0) -> Period | None:
+    """The clip's repetition where two pictures may differ by a small turn of the whole picture
+    (:data:`SWAY_DEG`, a camera swaying in the hand) and still count as the same, over the first
+    :data:`SWAY_FRAMES` frames: first as the camera was held, then with a steady roll taken out as
+    well (:func:`rolled_period`); None where neither comes back at least :data:`MIN_REPEATS` times.
+    See the module's notes."""
+    times_s, images = times_s[:SWAY_FRAMES], images[:SWAY_FRAMES]
+    if len(times_s) < 8 or images.size == 0:
+        return None
+    differences = swaying(shape)
+    found = find_period(times_s, images, clock_resolution_s, differences)
+    if found is None or found.repeats < MIN_REPEATS:
+        found = rolled_period(times_s, images, shape, clock_resolution_s, differences)
+    return None if found is None else replace(found, sway_deg=SWAY_DEG)
+
+
+def swaying(shape: tuple[int, int], sway_deg: float = SWAY_DEG) -> Differences:
+    """Pictures' differences allowing a sway: for each pair of frames, the least squared
+    difference over the first turned about its centre by up to ``sway_deg`` either way
+    (:data:`SWAY_STEP_DEG` steps), over the pixels that change most (as the plain differences are)."""
+    steps = np.arange(-sway_deg, sway_deg + 1e-9, SWAY_STEP_DEG)
+
+    def differences(images: np.ndarray) -> np.ndarray:
+        pixels, mean = changing_pixels(images)
+        chosen = slice(None) if pixels is None else pixels
+        mean = mean[chosen].astype(np.float32)
+        values = images[:, chosen].astype(np.float32) - mean
+        least = None
+        for step in steps:
+            turned = np.stack([turned_back_picture(image.reshape(shape), float(step), cv2.BORDER_REPLICATE).ravel()
+                               for image in images])[:, chosen].astype(np.float32) - mean
+            found = squared_differences(turned, values)
+            least = found if least is None else np.minimum(least, found, out=least)
+        assert least is not None
+        return np.minimum(least, least.T)  # (i turned to j and j turned to i: the same sway)
+
+    return differences
 
 
 def _best(found: dict[float, Period | None]) -> float | None:
@@ -110,13 +202,33 @@ def _best(found: dict[float, Period | None]) -> float | None:
 
 def turned_back(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int], roll_deg_s: float) -> np.ndarray:
     """Each thumbnail (one row of pixels, ``shape`` its rows and columns) turned back about its
-    centre by ``roll_deg_s`` times its time since the first (the corners turned in repeat the
-    picture's edge: black corners read as a change where the period compares whole pictures)."""
+    centre by ``roll_deg_s`` times its time since the first, and only the circle inscribed in it
+    kept (the rest 0, alike in every frame: no change there). Turned by the roll, a picture's
+    corners come from outside the frame, and a little more of them every moment: pictures turns
+    apart differ there by the roll alone. (The record rolled 3 degrees a second came back 6 times
+    in 30 s over the whole thumbnails, 14 times over the circle; rolled and swaying, not at all,
+    and 13 times.)"""
+    rows, columns = shape
+    y, x = np.mgrid[:rows, :columns]
+    outside = ((y - (rows - 1) / 2.0) ** 2 + (x - (columns - 1) / 2.0) ** 2 > (min(rows, columns) / 2.0) ** 2).ravel()
     turned = np.empty_like(images)
     for k, time_s in enumerate(times_s):
         turned[k] = turned_back_picture(images[k].reshape(shape), roll_deg_s * (time_s - times_s[0]),
                                         cv2.BORDER_REPLICATE).ravel()
+    turned[:, outside] = 0
     return turned
+
+
+def sway_note(period: Period) -> str:
+    """What the user is told where the repetition was found allowing the camera's sway."""
+    rolling = ""
+    if period.roll_deg_s:
+        way = "anticlockwise" if period.roll_deg_s > 0 else "clockwise"
+        rolling = f", rolling {abs(period.roll_deg_s):.2f} degrees a second ({way} as the picture shows it)"
+    return (f"no still background is seen, and the picture comes back after each turn only turned by a degree or so "
+            f"as by a camera that sways in the hand{rolling}: the rate is the clip's repetition allowing the whole "
+            f"picture a turn of up to {period.sway_deg:g} degrees either way (a turn of the whole scene would look "
+            f"the same; sought over the clip's first {SWAY_FRAMES} frames at most)")
 
 
 def roll_note(roll_deg_s: float) -> str:
