@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from rotrate_cli.stages.period import Thumbnails, find_period
-from rotrate_cli.stages.roll import rolled_period
+from rotrate_cli.stages.roll import rolled_period, unsteady_camera_period
 from rotrate_cli.video.frames import Frame
 
 FPS = 24.0
@@ -74,3 +74,56 @@ def test_a_picture_under_a_turn_has_no_rolled_return() -> None:
     thumbnails = _filmed(20.0, 3.0, 65.0, duration_s=8.0)
     assert thumbnails.shape is not None
     assert rolled_period(thumbnails.times_s, thumbnails.images, thumbnails.shape) is None
+
+
+def _swaying(period_s: float, tilt_deg: float, roll_deg_s: float = 0.0, duration_s: float = 15.0) -> Thumbnails:
+    """:func:`_filmed`'s disc, the camera also swaying as a hand does (1.5 and 0.4 degrees at 0.9
+    and 2.3 Hz about the picture's centre), with ``roll_deg_s`` of steady roll."""
+    rng = np.random.default_rng(5)
+    side = 900
+    texture = 6.0 * cv2.GaussianBlur(rng.uniform(0, 255, (side, side)).astype(np.float32), (0, 0), 10.0)
+    squash = math.cos(math.radians(tilt_deg))
+    centre = (150.0, 70.0)
+    thumbnails = Thumbnails()
+    frames = []
+    for index in range(int(duration_s * FPS)):
+        time_s = index / FPS
+        sway = 1.5 * math.sin(2 * math.pi * 0.9 * time_s) + 0.4 * math.sin(2 * math.pi * 2.3 * time_s + 1.0)
+        turn = cv2.getRotationMatrix2D((side / 2.0, side / 2.0), 360.0 * time_s / period_s, 1.0)
+        view = np.array([[1.0, 0.0, centre[0] - side / 2.0], [0.0, squash, centre[1] - squash * side / 2.0]])
+        camera = cv2.getRotationMatrix2D((127.5, 71.5), roll_deg_s * time_s + sway, 1.0)
+        image = cv2.warpAffine(texture, _then(camera, _then(view, turn)), (256, 144), flags=cv2.INTER_LINEAR,
+                               borderMode=cv2.BORDER_REFLECT)
+        frames.append(Frame(index, time_s, (image - image.mean() + 128.0).clip(0, 255).astype(np.uint8)))
+    for _ in thumbnails.tap(iter(frames)):
+        pass
+    return thumbnails
+
+
+def test_a_swaying_camera_s_picture_comes_back_each_turn_once_the_sway_is_allowed() -> None:
+    """A hand's sway of a degree or two spoils the plain return: the pictures a turn apart differ
+    by the sway. Allowed a small turn of the whole picture, they come back each turn, at the
+    disc's own rate, and the sway is said (its ``sway_deg``); with no sway, nothing changes."""
+    thumbnails = _swaying(2.5, 65.0)
+    assert thumbnails.shape is not None
+    plain = find_period(thumbnails.times_s, thumbnails.images)
+    found = unsteady_camera_period(thumbnails.times_s, thumbnails.images, thumbnails.shape, 0.0, plain)
+    assert plain is None or plain.period_s > 1.5 * 2.5  # plainly, back only where the sway lines up too
+    assert found is not None and found.sway_deg > 0 and found.roll_deg_s == 0
+    assert found.period_s == pytest.approx(2.5, rel=0.005)
+    assert found.period_low_s <= 2.5 <= found.period_high_s
+    assert found.repeats >= 4
+    still = _filmed(2.5, 0.0, 65.0)
+    plain = find_period(still.times_s, still.images)
+    assert unsteady_camera_period(still.times_s, still.images, still.shape, 0.0, plain) is plain
+
+
+def test_a_rolling_and_swaying_camera_s_roll_is_found() -> None:
+    thumbnails = _swaying(2.5, 65.0, roll_deg_s=3.0)
+    assert thumbnails.shape is not None
+    found = unsteady_camera_period(thumbnails.times_s, thumbnails.images, thumbnails.shape, 0.0,
+                                   find_period(thumbnails.times_s, thumbnails.images))
+    assert found is not None
+    assert found.roll_deg_s == pytest.approx(3.0, abs=0.5)
+    assert found.period_s == pytest.approx(2.5, rel=0.005)
+    assert found.period_low_s <= 2.5 <= found.period_high_s
