@@ -569,3 +569,51 @@ def test_the_record_filmed_by_a_rolling_camera_comes_back_once_the_roll_is_taken
     first = analyze(out, AnalysisConfig(fixation_px=None, end_s=12.0))
     assert first.omega_low_rad_s <= truth["omega"] <= first.omega_high_rad_s
     assert first.omega_rad_s == pytest.approx(truth["omega"], rel=0.01)
+
+
+@pytest.mark.slow  # about 40 s each (the copy is written first): in make test-slow
+@pytest.mark.parametrize("roll_deg_s", [0.0, -3.0])
+def test_the_record_filmed_by_a_swaying_camera_comes_back_each_turn(tmp_path: Path, roll_deg_s: float) -> None:
+    """The record close-up as a hand-held camera would show it (as bench-variants writes it: a
+    sway of 1.5 and 0.4 degrees at 0.9 and 2.3 Hz and a 4-pixel shake, and a steady roll or
+    none), nothing in it still. Plainly its picture came back only after five turns, where the
+    sway lined up too (-80%, weak); rolled as well, its tracks read -29%. Allowed the sway, or
+    with the roll taken out, it comes back each turn (issue 49): within 0.5%, its interval
+    holding the truth, and what was allowed is said."""
+    from benchmarks.bench_variants import rolled_frames
+
+    clip = VIDEOS / "record_oblique_closeup.mp4"
+    need(clip, "the record video")
+    truth = json.loads(clip.with_suffix(".truth.json").read_text())
+    reader = cv2.VideoCapture(str(clip))
+    fps = reader.get(cv2.CAP_PROP_FPS)
+
+    def frames():
+        while True:
+            ok, frame = reader.read()
+            if not ok:
+                return
+            yield frame
+
+    out = tmp_path / "swaying.mp4"
+    writer = None
+    for frame in rolled_frames(roll_deg_s, True, fps)(frames()):
+        if writer is None:
+            writer = cv2.VideoWriter(str(out), cv2.VideoWriter_fourcc(*"mp4v"), fps, (frame.shape[1], frame.shape[0]))
+        writer.write(frame)
+    reader.release()
+    assert writer is not None
+    writer.release()
+    analysis = analyze(out, AnalysisConfig(fixation_px=None, window_s=4.0))
+    assert analysis.rate_from == "repetition"
+    assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.005)
+    assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
+    assert analysis.period is not None
+    if roll_deg_s:
+        assert analysis.period.roll_deg_s == pytest.approx(-roll_deg_s, abs=0.5)
+        assert [w for w in analysis.warnings if "rolling" in w and "anticlockwise" in w]
+    else:
+        assert analysis.period.sway_deg > 0 and analysis.period.roll_deg_s == 0
+        assert [w for w in analysis.warnings if "sways in the hand" in w]
+    # omega(t): each window's rate from its return or the picture's turning, none from the tracks
+    assert analysis.series is not None and (analysis.series["rate_from"] != "tracks").all()

@@ -8,7 +8,7 @@ from collections.abc import Callable
 import numpy as np
 
 from rotrate_cli.runtime.lazy import pandas as pd
-from rotrate_cli.stages.period import Thumbnails, find_period
+from rotrate_cli.stages.period import Period, Thumbnails, find_period
 from rotrate_cli.stages.roll import swaying, turned_back
 from rotrate_cli.stages.verdict import MIN_TRACKS, WEAK_HALF_WIDTH, Verdict
 
@@ -59,6 +59,7 @@ def judged_series(series: pd.DataFrame, verdict: Verdict, thumbnails: Thumbnails
             by_angle[index] = rate
     for index, found in enumerate(returns):
         if found is not None and not found.far_apart:
+            found = _as_headline(found, verdict)
             omega[index], low[index], high[index] = found.omega_rad_s(verdict.repeats_per_turn)
             rate_from[index] = "repetition"
             agrees = abs(omega[index] / verdict.omega_rad_s - 1.0) <= WEAK_HALF_WIDTH
@@ -78,3 +79,14 @@ def judged_series(series: pd.DataFrame, verdict: Verdict, thumbnails: Thumbnails
         quality[index] = "good" if told and np.isfinite(omega[index]) else "weak"
     return rows.assign(omega_rad_s=omega, omega_low_rad_s=low, omega_high_rad_s=high, rate_from=rate_from,
                        quality=quality)
+
+
+def _as_headline(found: Period, verdict: Verdict) -> Period:
+    """A window's return as the headline's: where it spans a whole number of the headline's (two
+    turns where a sway or a light lined up only then; the swaying record's 4 s windows, one of 52
+    at half the rate), that many returns."""
+    rate = found.omega_rad_s(verdict.repeats_per_turn)[0]
+    spans = round(verdict.omega_rad_s / rate) if rate > 0 else 0
+    if spans >= 2 and abs(rate * spans / verdict.omega_rad_s - 1.0) <= WEAK_HALF_WIDTH:
+        return found.over(found.turns_between * spans)
+    return found
