@@ -531,30 +531,7 @@ def test_the_record_filmed_by_a_rolling_camera_comes_back_once_the_roll_is_taken
     turn the picture came back turned: its tracks read -49%, weak, the interval missing. The roll
     found from the return (issue 49) is reported, and the rate is the return's with it taken
     out."""
-    from benchmarks.bench_variants import rolled_frames
-
-    clip = VIDEOS / "record_oblique_closeup.mp4"
-    need(clip, "the record video")
-    truth = json.loads(clip.with_suffix(".truth.json").read_text())
-    reader = cv2.VideoCapture(str(clip))
-    fps = reader.get(cv2.CAP_PROP_FPS)
-
-    def frames():
-        while True:
-            ok, frame = reader.read()
-            if not ok:
-                return
-            yield frame
-
-    out = tmp_path / "rolled.mp4"
-    writer = None
-    for frame in rolled_frames(3.0, False, fps)(frames()):
-        if writer is None:
-            writer = cv2.VideoWriter(str(out), cv2.VideoWriter_fourcc(*"mp4v"), fps, (frame.shape[1], frame.shape[0]))
-        writer.write(frame)
-    reader.release()
-    assert writer is not None
-    writer.release()
+    out, truth = _record_filmed_moving(tmp_path, 3.0, wobble=False)
     analysis = analyze(out, AnalysisConfig(fixation_px=None, window_s=4.0))
     assert analysis.rate_from == "repetition"
     assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.005)
@@ -580,6 +557,25 @@ def test_the_record_filmed_by_a_swaying_camera_comes_back_each_turn(tmp_path: Pa
     sway lined up too (-80%, weak); rolled as well, its tracks read -29%. Allowed the sway, or
     with the roll taken out, it comes back each turn (issue 49): within 0.5%, its interval
     holding the truth, and what was allowed is said."""
+    out, truth = _record_filmed_moving(tmp_path, roll_deg_s, wobble=True)
+    analysis = analyze(out, AnalysisConfig(fixation_px=None, window_s=4.0))
+    assert analysis.rate_from == "repetition"
+    assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.005)
+    assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
+    assert analysis.period is not None
+    if roll_deg_s:
+        assert analysis.period.roll_deg_s == pytest.approx(-roll_deg_s, abs=0.5)
+        assert [w for w in analysis.warnings if "rolling" in w and "anticlockwise" in w]
+    else:
+        assert analysis.period.sway_deg > 0 and analysis.period.roll_deg_s == 0
+        assert [w for w in analysis.warnings if "sways in the hand" in w]
+    # omega(t): each window's rate from its return or the picture's turning, none from the tracks
+    assert analysis.series is not None and (analysis.series["rate_from"] != "tracks").all()
+
+
+def _record_filmed_moving(tmp_path: Path, roll_deg_s: float, wobble: bool) -> tuple[Path, dict]:
+    """The record close-up as a camera rolling ``roll_deg_s`` (and swaying in the hand, where
+    ``wobble``) would show it, as bench-variants writes it; and its truth."""
     from benchmarks.bench_variants import rolled_frames
 
     clip = VIDEOS / "record_oblique_closeup.mp4"
@@ -595,25 +591,13 @@ def test_the_record_filmed_by_a_swaying_camera_comes_back_each_turn(tmp_path: Pa
                 return
             yield frame
 
-    out = tmp_path / "swaying.mp4"
+    out = tmp_path / "moving.mp4"
     writer = None
-    for frame in rolled_frames(roll_deg_s, True, fps)(frames()):
+    for frame in rolled_frames(roll_deg_s, wobble, fps)(frames()):
         if writer is None:
             writer = cv2.VideoWriter(str(out), cv2.VideoWriter_fourcc(*"mp4v"), fps, (frame.shape[1], frame.shape[0]))
         writer.write(frame)
     reader.release()
     assert writer is not None
     writer.release()
-    analysis = analyze(out, AnalysisConfig(fixation_px=None, window_s=4.0))
-    assert analysis.rate_from == "repetition"
-    assert analysis.omega_rad_s == pytest.approx(truth["omega"], rel=0.005)
-    assert analysis.omega_low_rad_s <= truth["omega"] <= analysis.omega_high_rad_s
-    assert analysis.period is not None
-    if roll_deg_s:
-        assert analysis.period.roll_deg_s == pytest.approx(-roll_deg_s, abs=0.5)
-        assert [w for w in analysis.warnings if "rolling" in w and "anticlockwise" in w]
-    else:
-        assert analysis.period.sway_deg > 0 and analysis.period.roll_deg_s == 0
-        assert [w for w in analysis.warnings if "sways in the hand" in w]
-    # omega(t): each window's rate from its return or the picture's turning, none from the tracks
-    assert analysis.series is not None and (analysis.series["rate_from"] != "tracks").all()
+    return out, truth
