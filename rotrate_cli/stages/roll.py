@@ -23,16 +23,18 @@ A hand's wobble is not a steady roll: turned back by its mean roll, the picture 
 degree or two, and may line up once by chance; a roll is believed only where the picture then
 comes back several times (:data:`MIN_REPEATS`).
 
-So where neither finds a return, two pictures are allowed to differ by a small turn of the whole
-picture about its centre (:data:`SWAY_DEG` either way) and still count as the same
-(:func:`swayed_period`): a camera that sways in the hand turns the picture by a degree or two
-back and forth, and the body's turn does not line up with that. The shared record, its picture
-swaying 1.5 and 0.4 degrees at 0.9 and 2.3 Hz with a 4-pixel shake (no still background): plainly
-its picture came back only where the sway lined up too, after five turns (-80%, weak); allowed the
-sway, after each turn, 13 times, -0.01%. Rolled 3 degrees a second as well, the roll is sought as
-above with the sway allowed. A turn of the whole picture about its centre can stand in for the
-body's own only where the body turns about the centre seen face on; there the plain return finds
-it, and this is not tried.
+So where no still background shows and the plain return is doubtful (none, or fewer than
+:data:`MIN_REPEATS`, or a sooner one that matched less well), two pictures are first allowed to
+differ by a small turn of the whole picture about its centre (:data:`SWAY_DEG` either way) and
+still count as the same (:func:`swayed_period`): a camera that sways in the hand turns the picture
+by a degree or two back and forth, and the body's turn does not line up with that. Then the steady
+roll is sought, then the roll with the sway allowed (:func:`unsteady_camera_period`). The shared
+record, its picture swaying 1.5 and 0.4 degrees at 0.9 and 2.3 Hz with a 4-pixel shake (no still
+background): plainly its picture came back only where the sway lined up too, after five turns
+(-80%, weak); allowed the sway, after each turn, 13 times, -0.004%. Rolled 3 degrees a second as
+well, the steady roll brings it back (+0.09%). A turn of the whole picture about its centre can
+stand in for the body's own only where the body turns about the centre seen face on; there the
+plain return finds it, and none of this is tried.
 """
 
 from __future__ import annotations
@@ -55,7 +57,7 @@ REFINE_STEPS_DEG_S = (0.5, 0.25)
 #: often, or match clearly worse (their likeness, a difference, at least LESS_ALIKE above the
 #: best's), or are not found. A disc face on about the picture's middle comes back as often and
 #: as nearly alike at every roll (5 times, likeness 0.002-0.008); the rolled record came back 14
-#: times at 0.14 at 3 degrees a second, twice at 0.34 at 1 and 5; a tilted disc rolled 3 degrees a
+#: times at 0.14 at 3 degrees a second, twice at 0.34 2 degrees a second either side; a tilted disc rolled 3 degrees a
 #: second, 5 times at 0.003, and 3 times at 0.29 at 1.
 PINNED_APART_DEG_S = 2.0
 LESS_ALIKE = 0.1
@@ -183,13 +185,11 @@ def swaying(shape: tuple[int, int], sway_deg: float = SWAY_DEG) -> Differences:
         chosen = slice(None) if pixels is None else pixels
         mean = mean[chosen].astype(np.float32)
         values = images[:, chosen].astype(np.float32) - mean
-        least = None
-        for step in steps:
+        least = squared_differences(values, values)  # no sway
+        for step in steps[steps != 0.0]:
             turned = np.stack([turned_back_picture(image.reshape(shape), float(step), cv2.BORDER_REPLICATE).ravel()
                                for image in images])[:, chosen].astype(np.float32) - mean
-            found = squared_differences(turned, values)
-            least = found if least is None else np.minimum(least, found, out=least)
-        assert least is not None
+            np.minimum(least, squared_differences(turned, values), out=least)
         return np.minimum(least, least.T)  # (i turned to j and j turned to i: the same sway)
 
     return differences
