@@ -112,7 +112,8 @@ def rolled_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int
     if period.repeats < MIN_REPEATS:
         return None
     # pinned: the rolls a couple of degrees a second either side come back clearly less often
-    # and less alike, or not at all (face on about the middle, every roll comes back as often)
+    # or clearly less alike, or not at all (face on about the middle, every roll comes back as
+    # often and as nearly alike)
     for side in (-1.0, 1.0):
         other = tried(best + side * PINNED_APART_DEG_S)
         if other is not None and other.repeats > period.repeats / 2 and other.likeness < period.likeness + LESS_ALIKE:
@@ -224,10 +225,7 @@ def turned_back(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int],
 
 def sway_note(period: Period) -> str:
     """What the user is told where the repetition was found allowing the camera's sway."""
-    rolling = ""
-    if period.roll_deg_s:
-        way = "anticlockwise" if period.roll_deg_s > 0 else "clockwise"
-        rolling = f", rolling {abs(period.roll_deg_s):.2f} degrees a second ({way} as the picture shows it)"
+    rolling = f", {_rolling(period.roll_deg_s)}" if period.roll_deg_s else ""
     return (f"no still background is seen, and the picture comes back after each turn only turned by a degree or so "
             f"as by a camera that sways in the hand{rolling}: the rate is the clip's repetition allowing the whole "
             f"picture a turn of up to {period.sway_deg:g} degrees either way (a turn of the whole scene would look "
@@ -236,8 +234,12 @@ def sway_note(period: Period) -> str:
 
 def roll_note(roll_deg_s: float) -> str:
     """What the user is told where the repetition was found with the camera's roll taken out."""
-    way = "anticlockwise" if roll_deg_s > 0 else "clockwise"
     return (f"no still background is seen, but the picture comes back after each turn turned as by a camera "
-            f"rolling {abs(roll_deg_s):.2f} degrees a second ({way} as the picture shows it): the rate is the "
-            f"clip's repetition with that roll taken out (a turn of the whole scene would look the same)")
+            f"{_rolling(roll_deg_s)}: the rate is the clip's repetition with that roll taken out (a turn of the "
+            "whole scene would look the same)")
 
+
+def _rolling(roll_deg_s: float) -> str:
+    """A camera's steady roll in words, its sense as the picture shows it."""
+    way = "anticlockwise" if roll_deg_s > 0 else "clockwise"
+    return f"rolling {abs(roll_deg_s):.2f} degrees a second ({way} as the picture shows it)"
