@@ -6,9 +6,12 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from rotrate_cli.fitting.outliers import Combined
+from rotrate_cli.scene.disc import DiscView
+from rotrate_cli.scene.picture_angle import PictureAngle
 from rotrate_cli.scene.turning import PictureTurning
 from rotrate_cli.stages.period import Period
 from rotrate_cli.stages.verdict import MOST_REPEATS, judge, tell_repeats
@@ -126,3 +129,43 @@ def test_tracks_that_rule_out_a_turn_give_the_rate_of_an_exact_look_alike_return
     # tracks whose interval reaches near the return's rate leave the return's rate reported
     near = judge(_tracks(0.8 * turn, 0.3, 40), exact, 40)
     assert near.rate_from == "repetition"
+
+
+def test_loose_tracks_pick_the_count_shown_but_decide_none() -> None:
+    """EPFL car 02's first 50 photographs: its picture came back once, after 52 s (a look-alike
+    view half a turn on), and nothing told the count; its tracks, too loose to tell it (0.0645
+    rad/s within [0.061, 0.110] in the sense its near side travels), are still the only measure of
+    how fast it turns: the count shown is the one nearest them (k = 2, not the fastest, k = 1: +90%).
+    The result stays weak, its interval holding every count; tracks that slide, within [0, x],
+    pick nothing."""
+    period = Period(51.95, 50.74, 53.17, 1, 48, 0.22, 0.92, 0.0, 0.1, 47.0)
+    turn = 2 * math.pi / period.period_s
+    tracks = Combined(0.0645, 0.020, 0.145, 94, (0.0827, 0.0645), -1, (0.061, 0.110))
+    verdict = judge(tracks, period, 94)
+    assert (verdict.quality, verdict.repeats_per_turn) == ("weak", 2)
+    assert verdict.omega_rad_s == pytest.approx(turn / 2)
+    assert verdict.omega_low_rad_s <= turn / MOST_REPEATS and verdict.omega_high_rad_s >= turn
+    assert "nearest to the tracks'" in verdict.weak_because[0]
+    sliding = judge(Combined(0.0645, 0.0, 0.13, 94), period, 94)
+    assert sliding.repeats_per_turn == 1 and "nearest" not in sliding.weak_because[0]
+
+
+def _fan_angle(omega: float, first_deg: float, alike_deg: float) -> PictureAngle:
+    return PictureAngle(omega, omega * 0.9999, omega * 1.0001, 1, np.zeros(8), np.zeros(8), 540.0, 0.9,
+                        DiscView((0.0, 0.0), 0.0, 0.0, 100.0), alike_deg=alike_deg, first_step_deg=first_deg)
+
+
+def test_a_symmetric_body_s_other_steps_that_fit_no_count_leave_the_angle_s_count() -> None:
+    """A fan of three flat blades, 9.15 degrees between changes, its picture back every 0.8725 s:
+    its first step fits 129 degrees as well (one blade on), a reading 14 times as fast, which no
+    count of the return fits; the angle's count stands (it read 7.20 rad/s for 2.40, weak, as a
+    turn). An other step that fits a count, or frames far apart on the turn, leave it open."""
+    period = _return(period_s=0.8725, repeats=4, frames=120)
+    turn = 2 * math.pi / period.period_s
+    verdict = judge(None, period, angle=_fan_angle(turn / 3, -9.15, -129.15))
+    assert (verdict.quality, verdict.repeats_per_turn) == ("good", 3)
+    assert verdict.omega_rad_s == pytest.approx(turn / 3)
+    # its other step three times the first: a whole turn a return, as the return could be
+    assert judge(None, period, angle=_fan_angle(turn / 3, 10.0, 30.0)).quality == "weak"
+    far = replace(period, far_apart=True)
+    assert judge(None, far, angle=_fan_angle(turn / 3, -9.15, -129.15)).quality == "weak"

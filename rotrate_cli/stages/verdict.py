@@ -66,6 +66,10 @@ TRACKS_TELL = 0.25
 #: How far beyond their interval the tracks' rate may lie on real footage (through a lens
 #: found, on glossy paint: the EPFL cars' tracks 4-16% off a rate their interval missed).
 TRACKS_ALLOWANCE = 0.15
+#: Tracks too loose to tell the count still pick which count's rate is shown (the nearest theirs)
+#: where their interval spans at most this factor from end to end: the record's sliding tracks,
+#: 0.44 rad/s within [0, 0.88] under a 3.55 return, pick none.
+TRACKS_HINT = 2.0
 #: How far beyond its range of best trial rates the picture's turning may lie.
 TURNING_ALLOWANCE = 0.02
 #: Repeat counts listed in a warning where they are left open.
@@ -149,6 +153,28 @@ def _by_turning(period: Period, turning: PictureTurning | None) -> list[int] | N
     return within if within == [1] else None
 
 
+def _nearest_tracks(period: Period, counts: list[int], tracks: Combined | None, tracks_used: int) -> tuple[int, str]:
+    """Of the counts left open, the one whose rate lies nearest the tracks' (as a ratio), and the
+    words that say so; the fewest (``counts[0]``) and nothing where no tracks gave a rate, or one
+    whose interval (their seen sense's, where the near side's travel told it) is wider than a
+    factor of :data:`TRACKS_HINT` from end to end (it holds a count and its double alike). Tracks
+    too loose to tell the count are still the only measure of how fast the body turns, where the
+    fewest repeats is the fastest reading of all: the first 50 photographs of EPFL car 02 came
+    back once, after 52 s (a look-alike view half a turn on), and read 0.121 rad/s for 0.0635,
+    weak, while its tracks read 0.0645 within [0.020, 0.145]; nearest them, 0.0605."""
+    if tracks is None or tracks_used < MIN_TRACKS or not 0 < tracks.omega_rad_s < math.inf:
+        return counts[0], ""
+    low, high = (tracks.seen_interval_rad_s if tracks.seen_sense and tracks.seen_interval_rad_s is not None
+                 else (tracks.omega_low_rad_s, tracks.omega_high_rad_s))
+    if not 0 < low <= high <= TRACKS_HINT * low:
+        return counts[0], ""  # tracks that slide on grooves and rims read several times slow, within [0, x]
+    nearest = min(counts, key=lambda k: abs(math.log(period.omega_rad_s(k)[0] / tracks.omega_rad_s)))
+    if nearest == counts[0]:
+        return nearest, ""
+    return nearest, (f"; the rate shown is k = {nearest}'s, the nearest to the tracks' ({tracks.omega_rad_s:.4g} "
+                     "rad/s), though they are too loose to tell the count")
+
+
 def _listed(period: Period, counts: list[int] | tuple[int, ...]) -> str:
     shown = ", ".join(f"k = {k}: {period.omega_rad_s(k)[0]:.4g}" for k in counts[:LISTED])
     return shown + (f", ... k = {counts[-1]}: {period.omega_rad_s(counts[-1])[0]:.4g}" if len(counts) > LISTED else "")
@@ -157,12 +183,43 @@ def _listed(period: Period, counts: list[int] | tuple[int, ...]) -> str:
 def _count_by_angle(period: Period, angle: PictureAngle | None) -> list[int] | None:
     """The one count the picture's own angle tells (its interval, within
     :data:`TURNING_ALLOWANCE`, holds one count's rate alone); None where it tells none (no
-    measurement, a turn between frames that fits two ways, or several counts)."""
-    if angle is None or angle.alike_deg is not None:
+    measurement, several counts, or a turn between frames that fits two ways whose other reading
+    fits a count too).
+
+    A symmetric body's first step fits its other shifts alike (a fan of three flat blades turning
+    9 degrees between changes fits 129 as well: each shift one blade on): those readings are the
+    angle's rate scaled as the step, both ways round (:func:`_other_steps`). Where the return fits
+    none of them, they are ruled out and the angle's own count stands: that fan, its picture back
+    every 0.87 s, read 7.20 rad/s for 2.40, weak, every count open, while its angle read 2.3999 and
+    its other readings 29 and 34 rad/s, faster than the return's whole turn. Not where the frames
+    lie far apart on the turn (:attr:`rotrate_cli.stages.period.Period.far_apart`): there the
+    return's counts are a guess too (six blades 25 degrees a frame: the angle read 5 degrees a
+    frame, and the return's count that fitted it, -80%)."""
+    if angle is None:
         return None
     within = counts_within(period, angle.omega_low_rad_s / (1 + TURNING_ALLOWANCE),
                            angle.omega_high_rad_s * (1 + TURNING_ALLOWANCE))
-    return within if len(within) == 1 else None
+    if len(within) != 1:
+        return None
+    if angle.alike_deg is not None:
+        if period.far_apart:
+            return None  # frames far apart on the turn: the return's counts are themselves a guess
+        for scale in _other_steps(angle):
+            low, high = angle.omega_low_rad_s * scale, angle.omega_high_rad_s * scale
+            if not math.isfinite(scale) or counts_within(period, low / (1 + TURNING_ALLOWANCE),
+                                                         high * (1 + TURNING_ALLOWANCE)):
+                return None
+    return within
+
+
+def _other_steps(angle: PictureAngle) -> tuple[float, float]:
+    """The rates the picture's angle would read (as multiples of its own) had its first step been
+    one of the other two shifts next to it that a symmetric body fits alike: ``alike_deg`` and
+    the one as far the other side of the step taken (inf where the step is none)."""
+    first, alike = angle.first_step_deg, angle.alike_deg
+    if alike is None or first == 0:
+        return (math.inf, math.inf)
+    return (abs(alike / first), abs((2.0 * first - alike) / first))
 
 
 def tell_repeats(period: Period, tracks: Combined | None, tracks_used: int,
@@ -186,10 +243,12 @@ def tell_repeats(period: Period, tracks: Combined | None, tracks_used: int,
                                                      ("the picture's turning", by_turning)) if counts is not None]
     if not told:
         counts = list(range(1, MOST_REPEATS + 1))
-        return Repeats(1, False, tuple(counts), weak=(
+        shown, said = _nearest_tracks(period, counts, tracks, tracks_used)
+        return Repeats(shown, False, tuple(counts), weak=(
             f"{return_s}, but nothing tells whether that is a whole turn or a part of one (a body that looks "
             f"alike n times a turn, such as a fan, spokes or a pattern, comes back n times): the rate is "
-            f"{_listed(period, counts)} rad/s for k repeats a turn; the 95% interval holds them all",), untold=True)
+            f"{_listed(period, counts)} rad/s for k repeats a turn; the 95% interval holds them all{said}",),
+            untold=True)
     common = set.intersection(*(counts for _, counts in told))
     names = " and ".join(name for name, _ in told)
     if len(common) == 1:
@@ -198,9 +257,10 @@ def tell_repeats(period: Period, tracks: Combined | None, tracks_used: int,
         return Repeats(k, True, (k,), names, notes)
     if common:
         counts = sorted(common)
-        return Repeats(counts[0], False, tuple(counts), weak=(
+        shown, said = _nearest_tracks(period, counts, tracks, tracks_used)
+        return Repeats(shown, False, tuple(counts), weak=(
             f"{return_s}; {names} leaves open how many times a turn: {_listed(period, counts)} rad/s; the 95% "
-            "interval holds them all",))
+            f"interval holds them all{said}",))
     # the evidence fits no whole number of repeats
     said = "; ".join(f"{name} allows k = {', '.join(map(str, sorted(c)))}" if c else f"{name} fits no whole number"
                      for name, c in told)
@@ -297,6 +357,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
     rate_from, spanned, thin_part, plane = "repetition", False, False, False
     if not confirmed:  # the interval holds every count of repeats a turn still open: weak for that already
         low = min(low, period.omega_rad_s(max(told.candidates))[1])
+        high = max(high, period.omega_rad_s(min(told.candidates))[2])
         spanned = True
         if told.spanned_by is not None:
             low, high = min(low, told.spanned_by[0]), max(high, told.spanned_by[1])
