@@ -68,3 +68,13 @@ def test_rotor_frames_are_the_exact_turn(tmp_path: Path) -> None:
 def test_no_axis_no_turning_test() -> None:
     """Where no axis was given or found (NaN), the test of the picture's turning says nothing."""
     assert picture_turning([], (math.nan, math.nan), 640, 2.0) is None
+
+
+def test_a_flat_fan_is_told_its_blades_by_the_picture_s_own_angle(tmp_path: Path) -> None:
+    """Five flat blades, little to track: the picture's own angle reads the rate closely, and its
+    first step's other readings (a blade on either side, 8-20 times as fast) fit no count of the
+    return, so the angle tells the count (before: five times too fast, weak)."""
+    analysis, truth = _measured(RotorScene("fan", 5, 2.0, texture=0.0, duration_s=3.0, seed=4), tmp_path)
+    assert analysis.quality == "good" and analysis.verdict.repeats_per_turn == 5
+    assert analysis.omega_rad_s == pytest.approx(truth, rel=0.005)
+    assert analysis.omega_low_rad_s <= truth <= analysis.omega_high_rad_s
