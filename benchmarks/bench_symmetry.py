@@ -61,6 +61,14 @@ CASES = (
     Case("fan6-fast-25deg", RotorScene("fan", 6, _deg_a_frame(25), texture=0.3, duration_s=3.0, seed=14)),
     Case("spokes3-fast-40deg", RotorScene("spokes", 3, _deg_a_frame(40), texture=0.5, duration_s=3.0, seed=15)),
     Case("fan2-fast-20deg", RotorScene("fan", 2, _deg_a_frame(20), texture=0.8, duration_s=3.0, seed=16)),
+    # flat blades whose count the picture's own angle tells (their first step fits a blade on as
+    # well: readings a count of the return must rule out), tilted, clockwise, with the axis out of
+    # the frame, and at 10 degrees a frame, where the angle's first step fits two ways
+    Case("fan3-flat-tilt40", RotorScene("fan", 3, 2.0, texture=0.0, tilt_deg=40, duration_s=3.0, seed=21)),
+    Case("fan4-flat-cw", RotorScene("fan", 4, -1.6, texture=0.0, duration_s=3.0, seed=22)),
+    Case("fan3-flat-off-frame", RotorScene("fan", 3, 1.5, texture=0.0, centre_px=(520.0, 180.0), radius_px=220,
+                                           duration_s=4.0, seed=25)),
+    Case("fan5-flat-10deg", RotorScene("fan", 5, _deg_a_frame(10), texture=0.0, duration_s=2.5, seed=23)),
     Case("drum16-checker-side", drum=SceneConfig("cylinder", 1.3, duration_s=6.0, symmetry=16, checker=True, seed=17)),
     Case("drum6-side", drum=SceneConfig("cylinder", 0.8, duration_s=5.0, symmetry=6, seed=18)),
     Case("drum4-checker-side-fast", drum=SceneConfig("cylinder", _deg_a_frame(25), duration_s=3.0, symmetry=4,
