@@ -218,7 +218,7 @@ def _other_steps(angle: PictureAngle) -> tuple[float, float]:
     the one as far the other side of the step taken (inf where the step is none)."""
     first, alike = angle.first_step_deg, angle.alike_deg
     if alike is None or first == 0:
-        return (math.inf, math.inf)
+        return (math.inf, math.inf)  # no other step, or no step to scale
     return (abs(alike / first), abs((2.0 * first - alike) / first))
 
 
@@ -401,8 +401,9 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                             else "the tracks' rate is reported, as the return is not exact"
                             if period.excess > LOOK_ALIKE_EXCESS
                             else "the tracks' rate is reported, as they turn well under a turn in that time")
+                part = "a turn" if repeats == 1 else f"1/{repeats} of a turn"  # (the count shown: the tracks' nearest)
                 notes.append(f"the 95% interval spans both readings: the repetition's {repeated:.4g} rad/s if the "
-                             f"picture's return is a turn, the tracks' {tracks.omega_rad_s:.4g} rad/s if it is a "
+                             f"picture's return is {part}, the tracks' {tracks.omega_rad_s:.4g} rad/s if it is a "
                              f"look-alike view; {reported}")
     if confirmed and not spanned and rate_from == "repetition":
         closer = _closer_by_angle(period, omega, low, high, angle)
@@ -560,7 +561,7 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
              "one plane turning about its axis (through any view)"]
     # the ``doubts`` are of the tracks' rate: told only where it is the one reported
     if angle.alike_deg is not None and angle.first_step_deg != 0:
-        other = omega * abs(angle.alike_deg / angle.first_step_deg)
+        other = omega * _other_steps(angle)[0]
         weak.append(f"the picture's turning between frames fits {abs(angle.first_step_deg):.1f} and "
                     f"{abs(angle.alike_deg):.1f} degrees alike (a body that looks alike several times a turn, "
                     f"turning fast): {omega:.4g} or {other:.4g} rad/s; the 95% interval holds both")
