@@ -266,3 +266,24 @@ def test_the_overlay_draws_the_axis_where_a_moving_camera_saw_it() -> None:
     assert x == pytest.approx(math.cos(turn) * 100 - math.sin(turn) * 50 + 30)
     assert y == pytest.approx(math.sin(turn) * 100 + math.cos(turn) * 50 - 20)
     assert angle == pytest.approx(10.0)
+
+
+def test_no_axis_draws_none_rather_than_failing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A rate from the picture's return alone (flat fan blades: no track) has no axis, its point
+    NaN: the overlay drew it and failed after the analysis ("cannot convert float NaN to
+    integer"), and `frame` did too. Now no axis is drawn, and `frame` says none was found."""
+    from types import SimpleNamespace
+
+    from rotrate_cli import analysis
+    from rotrate_cli.output.overlay import draw_axis
+
+    image = np.full((60, 80, 3), 90, np.uint8)
+    draw_axis(image, (float("nan"), float("nan")), 0.0, "nan,nan")
+    assert (image == 90).all()
+    repetition_only = SimpleNamespace(fixation_px=(float("nan"), float("nan")), axis_angle_deg=float("nan"),
+                                      omega_rad_s=2.0)
+    monkeypatch.setattr(analysis, "analyze", lambda *args, **kwargs: repetition_only)
+    result = runner.invoke(app, ["frame", str(BOX), "-o", str(tmp_path / "f.png")])
+    assert result.exit_code == 0, result.output
+    assert "no axis found" in result.stdout and "nan" not in result.stdout
+    assert (tmp_path / "f.png").exists()

@@ -114,6 +114,7 @@ def frame_command(
         source = FrameSource(video, fps=fps)
         frame = frame_at(source, at)
         image = draw_grid(frame.image, grid)
+        message: str | None = None
         try:  # the axis from the motion around that time
             analysis = analyze(video, AnalysisConfig(fixation_px=None, fps=fps, start_s=max(0.0, at - 3.0),
                                                      end_s=at + 3.0, angle_from=angle_from))
@@ -123,12 +124,16 @@ def frame_command(
             message = f"no axis found ({in_flags(str(exc))}); read --fixation X,Y off the grid"
         except RotrateError as exc:
             message = f"no axis found ({in_flags(str(exc))}); read --fixation X,Y off the grid"
-        else:
+        if message is None:
             x, y = analysis.fixation_px
-            draw_axis(image, (x, y), analysis.axis_angle_deg, f"{x:.1f},{y:.1f}")
-            hint = "" if angle_from == "auto" else f" --angle-from {angle_from}"
-            message = (f"axis found through {x:.1f},{y:.1f} ({analysis.axis_angle_deg:+.1f} deg from vertical; "
-                       f"omega {analysis.omega_rad_s:.4f} rad/s): try --fixation {x:.1f},{y:.1f}{hint}")
+            if math.isfinite(x) and math.isfinite(y):
+                draw_axis(image, (x, y), analysis.axis_angle_deg, f"{x:.1f},{y:.1f}")
+                hint = "" if angle_from == "auto" else f" --angle-from {angle_from}"
+                message = (f"axis found through {x:.1f},{y:.1f} ({analysis.axis_angle_deg:+.1f} deg from vertical; "
+                           f"omega {analysis.omega_rad_s:.4f} rad/s): try --fixation {x:.1f},{y:.1f}{hint}")
+            else:  # no track: the rate is the picture's return alone, about no axis
+                message = (f"no axis found (no track gave a rate; omega {analysis.omega_rad_s:.4f} rad/s is the "
+                           "picture's return alone); read --fixation X,Y off the grid")
         write_image(output, image, force)
         console(highlight=False, soft_wrap=True).print(f"wrote {output} (frame {frame.index}, {frame.time_s:.3f} s); "
                                                        f"{message}", markup=False)

@@ -79,7 +79,10 @@ def draw_grid(image: np.ndarray, step_px: int = 50) -> np.ndarray:
 
 def draw_axis(image: np.ndarray, point_px: tuple[float, float], angle_deg: float, label: str = "") -> None:
     """Draw the axis through ``point_px`` at ``angle_deg`` (0 vertical) across the whole image,
-    a cross at the point, and ``label`` beside it (in place)."""
+    a cross at the point, and ``label`` beside it (in place); nothing where no axis was found (a
+    rate from the picture's return alone: its point is NaN)."""
+    if not all(math.isfinite(value) for value in (*point_px, angle_deg)):
+        return
     ux, uy = unit_offset(angle_deg)
     along = (-uy, ux)  # the axis runs perpendicular to the offset direction
     reach = 2.0 * (image.shape[0] + image.shape[1])
