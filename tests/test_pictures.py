@@ -287,3 +287,22 @@ def test_no_axis_draws_none_rather_than_failing(tmp_path: Path, monkeypatch: pyt
     assert result.exit_code == 0, result.output
     assert "no axis found" in result.stdout and "nan" not in result.stdout
     assert (tmp_path / "f.png").exists()
+
+
+def test_a_report_with_no_axis_says_none_was_found() -> None:
+    """A rate from the picture's return alone has no axis: the table said `nan px (found from the
+    tracks)` and JSON `found: true` beside a null point."""
+    from dataclasses import replace
+
+    from rich.console import Console
+
+    from rotrate_cli import AnalysisConfig, analyze
+    from rotrate_cli.cli.report import render_table, to_dict
+
+    analysis = replace(analyze(BOX, AnalysisConfig(fixation_px=None, end_s=1.5)),
+                       fixation_px=(float("nan"), float("nan")))
+    console = Console(record=True, width=200)
+    render_table(analysis, console)
+    assert "none found (no track gave a rate)" in console.export_text()
+    axis = to_dict(analysis)["axis"]
+    assert axis["point_px"] == [None, None] and axis["found"] is False

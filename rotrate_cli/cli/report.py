@@ -130,7 +130,7 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
         "axis": {
             "angle_deg": _number(analysis.axis_angle_deg, 3),
             "point_px": [_number(v, 3) for v in analysis.fixation_px],
-            "found": analysis.axis_found,
+            "found": analysis.axis_found and math.isfinite(analysis.fixation_px[0]),
             "angle_found": analysis.axis_angle_found,
             "angle_from": analysis.axis_angle_from if analysis.axis_angle_found else None,
             "elevation_deg": _number(analysis.elevation_deg, 2),
@@ -235,9 +235,12 @@ def render_table(analysis: Analysis, console: Console) -> None:
     summary.add_row("direction", analysis.direction + ("" if analysis.direction == "unknown"
                                                        else f"  ({_direction_seen(analysis)})"))
     fx, fy = analysis.fixation_px
-    summary.add_row("fixation", f"{fx:.1f}" + ("" if math.isnan(fy) else f", {fy:.1f}")
-                    + (f" {analysis.position_unit}" if math.isnan(fy) else " px")
-                    + (f"  (found from {_fixation_from(analysis)})" if analysis.axis_found else ""))
+    if math.isnan(fx):  # no axis: the rate is the picture's return alone (no track gave one)
+        summary.add_row("fixation", "none found (no track gave a rate)")
+    else:
+        summary.add_row("fixation", f"{fx:.1f}" + ("" if math.isnan(fy) else f", {fy:.1f}")
+                        + (f" {analysis.position_unit}" if math.isnan(fy) else " px")
+                        + (f"  (found from {_fixation_from(analysis)})" if analysis.axis_found else ""))
     if not math.isnan(fy):
         summary.add_row("axis", f"{analysis.axis_angle_deg:+.2f} deg from vertical (top end "
                         f"{'right' if analysis.axis_angle_deg >= 0 else 'left'})"
