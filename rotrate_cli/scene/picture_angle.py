@@ -110,6 +110,8 @@ FREE_SHARE = 0.5
 CLEARLY_BETTER = 1.25
 #: Another shift that fits nearly as well (this fraction of the best) leaves the turn open.
 ALIKE_PEAK = 0.9
+#: ... and where most pairs of changes fit two so, each is read as the one this much smaller.
+CLEARLY_SMALLER = 0.75
 
 
 @dataclass(frozen=True)
@@ -473,7 +475,9 @@ def _first_rate(changes: list[_Change], correlate: RingCorrelations,
         # most pairs fit two shifts alike (a symmetric body): each is read as the smaller, the
         # turn a frame that does not outrun its picture's repeat (a flat five-bladed fan turning 10
         # degrees a frame: 20 between changes fitted -52 as well, and read 2.6 times too fast)
-        found = [(rate * other / shift, other, shift) if other is not None and abs(other) < abs(shift) and shift
+        # (clearly smaller: at half a repeat a frame the two are alike in size too, and the better
+        # fit stands; six blades at 15 degrees a frame, 30 between changes, fitted -30 as well)
+        found = [(rate * other / shift, other, shift) if other is not None and abs(other) < CLEARLY_SMALLER * abs(shift)
                  else (rate, shift, other) for rate, shift, other in found]
     middle = float(np.median([rate for rate, _, _ in found]))
     rate, step, other = min(found, key=lambda item: abs(item[0] - middle))
