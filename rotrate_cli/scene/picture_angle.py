@@ -91,7 +91,7 @@ FARTHEST_STEPS = 4.0
 #: three-bladed fan face on, its axis 40 px right of the frame, 0.3 of a turn: its view found 9 px
 #: off the axis (in a 320-px picture) and tilted 18 degrees lined its changes up worse, by 5
 #: standard errors, than one moved 4 steps towards the axis; stopped there, it read +6.3% within
-#: +-4.6%, good, missing; followed on, within +-15%, weak, covering. (Every way followed to 16
+#: +-4.6%, good, missing; followed on, within +-9.4%, weak, covering. (Every way followed to 16
 #: steps, views that lined up no better, only not clearly worse, made 7 of the real wheel's
 #: copies' parts weak that were within 0.7%.)
 FARTHEST_BETTER_STEPS = 16.0
