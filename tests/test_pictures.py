@@ -306,3 +306,21 @@ def test_a_report_with_no_axis_says_none_was_found() -> None:
     assert "none found (no track gave a rate)" in console.export_text()
     axis = to_dict(analysis)["axis"]
     assert axis["point_px"] == [None, None] and axis["found"] is False
+
+
+def test_an_overlay_with_no_point_followed_is_written(tmp_path: Path) -> None:
+    """The wheel's 0.3 of a turn from 0.3 s: no point was followed, and the rate is the picture's
+    turning alone. Its overlay failed after the analysis (the running rate of no samples, then no
+    tracks to draw); now it is written, no trail drawn."""
+    from dataclasses import replace
+
+    from rotrate_cli import AnalysisConfig, analyze
+    from rotrate_cli.cli.analyze import _write_overlay
+    from rotrate_cli.fitting.series import running_rate
+
+    assert running_rate(pd.DataFrame(columns=["track", "frame", "time_s", "offset_px"]), lambda _: None).empty
+    analysis = analyze(BOX, AnalysisConfig(fixation_px=None, end_s=1.5, keep_tracks=True))
+    untracked = replace(analysis, tracks=None, offsets=analysis.offsets.iloc[:0])
+    video = tmp_path / "overlay.mp4"
+    _write_overlay(str(BOX), None, 0.0, 1.5, untracked, video, False)
+    assert video.exists() and cv2.VideoCapture(str(video)).get(cv2.CAP_PROP_FRAME_COUNT) > 30

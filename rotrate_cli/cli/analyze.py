@@ -330,14 +330,18 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
 
     from rotrate_cli.fitting.series import running_rate
     from rotrate_cli.output.overlay import write_overlay
+    from rotrate_cli.runtime.lazy import pandas as pd
     from rotrate_cli.stages.fits import running_measure
     from rotrate_cli.video.decode import FrameSource
 
-    running = running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection, analysis.camera))
+    headline = analysis.rate_from in ("repetition", "turning")  # not the tracks' rate: the headline throughout
+    running = (running_rate(analysis.offsets.iloc[:0], lambda _: None) if headline  # type: ignore[arg-type,return-value]
+               else running_rate(analysis.offsets, running_measure(analysis.method, analysis.rejection,
+                                                                    analysis.camera)))
     times = running["time_s"].to_numpy()
 
     def at(time_s: float) -> tuple[float, float, float]:
-        if analysis.rate_from in ("repetition", "turning"):  # not the tracks' rate: the headline throughout
+        if headline:
             return analysis.omega_rad_s, analysis.omega_low_rad_s, analysis.omega_high_rad_s
         index = int(np.searchsorted(times, time_s + 1e-9, side="right")) - 1
         if index < 0:
@@ -347,10 +351,14 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
 
     features = analysis.features
     inliers = set(features.loc[features["inlier"], "track"].astype(int))
-    assert analysis.tracks is not None  # noqa: S101 - asked for with keep_tracks
+    tracks = analysis.tracks
+    if tracks is None:  # no point was followed at all (the picture's turning alone): none to draw
+        tracks = pd.DataFrame({"frame": pd.Series(dtype=int), "time_s": pd.Series(dtype=float),
+                               "track": pd.Series(dtype=int), "x_px": pd.Series(dtype=float),
+                               "y_px": pd.Series(dtype=float)})
     named = {int(track): str(reason) for track, reason in zip(features["track"], features["reason"], strict=True)
              if reason in ("reflection", "slides", "other_motion")}
-    write_overlay(FrameSource(source, fps=fps, times_s=times_s), path, analysis.tracks, inliers, analysis.fixation_px,
+    write_overlay(FrameSource(source, fps=fps, times_s=times_s), path, tracks, inliers, analysis.fixation_px,
                   analysis.axis_angle_deg, at, start, end, force, named, progress, analysis.camera_path)
 
 

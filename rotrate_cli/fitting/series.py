@@ -129,8 +129,10 @@ def running_rate(offsets: pd.DataFrame, measure: Callable[[pd.DataFrame], Combin
     """The rate as it would have been measured up to each time: :data:`SERIES_COLUMNS` every
     ``step_s`` (default: a twentieth of the clip, at least half a second). ``offsets``: ``track,
     frame, time_s, offset_px``; ``measure``: the combined rate of a part of them (the analysis's
-    own rules). NaN until enough of a turn has been seen."""
+    own rules). NaN until enough of a turn has been seen; no row where no track has a sample."""
     times = offsets["time_s"].to_numpy()
+    if len(times) == 0:
+        return pd.DataFrame(columns=list(SERIES_COLUMNS))
     first, last = float(times.min()), float(times.max())
     step = step_s if step_s is not None else max(0.5, (last - first) / 20.0)
     rows = []
