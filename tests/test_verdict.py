@@ -169,3 +169,21 @@ def test_a_symmetric_body_s_other_steps_that_fit_no_count_leave_the_angle_s_coun
     assert judge(None, period, angle=_fan_angle(turn / 3, 10.0, 30.0)).quality == "weak"
     far = replace(period, far_apart=True)
     assert judge(None, far, angle=_fan_angle(turn / 3, -9.15, -129.15)).quality == "weak"
+
+
+def test_an_angle_whose_changes_line_up_poorly_tells_no_count() -> None:
+    """A flat six-spoked wheel face on, its picture back every 0.698 s: its view found tilted 57
+    degrees, its changes lined up at 0.32 and read 2.22 rad/s within +-5%, the rate of four repeats
+    a turn (+50%, good). Lining up that poorly, the angle tells no count: the result is weak and its
+    interval holds six repeats' rate. Lining up well, the same reading tells its count."""
+    period = _return(period_s=0.6983, repeats=7, frames=150)
+    turn = 2 * math.pi / period.period_s
+
+    def angle(score: float) -> PictureAngle:
+        return PictureAngle(2.2241, 2.1054, 2.3428, 1, np.zeros(8), np.zeros(8), 606.0, score,
+                            DiscView((0.0, 0.0), 0.0, 0.0, 100.0))
+
+    poor = judge(None, period, angle=angle(0.32))
+    assert poor.quality == "weak" and poor.omega_low_rad_s <= turn / 6 <= poor.omega_high_rad_s
+    told = judge(None, period, angle=angle(0.9))
+    assert (told.quality, told.repeats_per_turn) == ("good", 4)

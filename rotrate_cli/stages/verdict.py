@@ -180,11 +180,20 @@ def _listed(period: Period, counts: list[int] | tuple[int, ...]) -> str:
     return shown + (f", ... k = {counts[-1]}: {period.omega_rad_s(counts[-1])[0]:.4g}" if len(counts) > LISTED else "")
 
 
+#: The picture's own angle tells a count only where its changes line up at least this well through
+#: its view (:attr:`rotrate_cli.scene.picture_angle.PictureAngle.score`, the median peak
+#: correlation). On bench-symmetry's renders the angles that told the right count lined up at
+#: 0.69-0.94 (spokes12-face the lowest); a flat six-spoked wheel face on, its view found tilted 57
+#: degrees, at 0.32, read 1.48 times too fast within +-5% and could tell four repeats a turn
+#: (+50%, good).
+COUNT_SCORE = 0.5
+
+
 def _count_by_angle(period: Period, angle: PictureAngle | None) -> list[int] | None:
     """The one count the picture's own angle tells (its interval, within
     :data:`TURNING_ALLOWANCE`, holds one count's rate alone); None where it tells none (no
-    measurement, several counts, or a turn between frames that fits two ways whose other reading
-    fits a count too).
+    measurement, changes that line up poorly through its view (:data:`COUNT_SCORE`), several
+    counts, or a turn between frames that fits two ways whose other reading fits a count too).
 
     A symmetric body's first step fits its other shifts alike (a fan of three flat blades turning
     9 degrees between changes fits 129 as well: each shift one blade on): those readings are the
@@ -195,7 +204,7 @@ def _count_by_angle(period: Period, angle: PictureAngle | None) -> list[int] | N
     lie far apart on the turn (:attr:`rotrate_cli.stages.period.Period.far_apart`): there the
     return's counts are a guess too (six blades 25 degrees a frame: the angle read 5 degrees a
     frame, and the return's count that fitted it, -80%)."""
-    if angle is None:
+    if angle is None or not angle.score >= COUNT_SCORE:
         return None
     within = counts_within(period, angle.omega_low_rad_s / (1 + TURNING_ALLOWANCE),
                            angle.omega_high_rad_s * (1 + TURNING_ALLOWANCE))
