@@ -187,3 +187,26 @@ def test_an_angle_whose_changes_line_up_poorly_tells_no_count() -> None:
     assert poor.quality == "weak" and poor.omega_low_rad_s <= turn / 6 <= poor.omega_high_rad_s
     told = judge(None, period, angle=angle(0.9))
     assert (told.quality, told.repeats_per_turn) == ("good", 4)
+
+
+def test_an_inexact_return_seen_once_is_set_against_the_picture_s_angle() -> None:
+    """Two discs side by side turning 1.0 and 1.6 rad/s, 8 s: the picture came back once, after the
+    faster one's turn, but not exactly (its pairs 0.40 apart beyond their timing: the slower disc
+    had not come back), and read 1.591 within [1.583, 1.599], good, for 1.6. Narrow as it is, an
+    inexact return is set against the picture's own turning angle: where the angle is closer and
+    agrees, it gives the rate; where the two disagree, the result is weak and holds both."""
+    inexact = Period(3.9494, 3.9285, 3.9702, 1, 226, 0.49, 0.36, 0.0, 0.40, 118.0)
+    turning = PictureTurning(1.6, 1.3, 1.7, 1, 10, 10)  # tells that the return is a whole turn
+
+    def angle(omega: float) -> PictureAngle:
+        return PictureAngle(omega, omega * 0.9997, omega * 1.0003, 1, np.zeros(8), np.zeros(8), 720.0, 0.84,
+                            DiscView((0.0, 0.0), 0.0, 0.0, 100.0))
+
+    closer = judge(_tracks(0.68, 0.33, 55), inexact, 55, turning=turning, angle=angle(1.59935))
+    assert (closer.quality, closer.rate_from) == ("good", "turning")
+    assert closer.omega_rad_s == pytest.approx(1.59935)
+    apart = judge(_tracks(0.68, 0.33, 55), inexact, 55, turning=turning, angle=angle(1.62))
+    assert apart.quality == "weak" and apart.omega_high_rad_s >= 1.62 * 1.0003
+    # an exact return of the same width is not set against the angle (seconds to measure)
+    exact = replace(inexact, excess=0.05)
+    assert judge(_tracks(0.68, 0.33, 55), exact, 55, turning=turning, angle=angle(1.62)).quality == "good"
