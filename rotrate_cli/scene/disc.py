@@ -39,8 +39,9 @@ SPARSE_MOVING = 3.0
 #: degrees a frame, 60 frames/s: 7 of its 22 rings counted, which lined the changes up through a
 #: wrong view, tilted 33 degrees and 7 px off, better than through the right one; its tracks'
 #: plane then read -0.8%, its interval missing, good.) Where the moving rings change by more, the
-#: rule is as it was: at any level it let a flat six-spoked wheel's view search settle on views
-#: whose changes line up 1.5 times too fast, within +-5%, good (before, +-24%, weak).
+#: rule is as it was. (It narrows some readings through wrong views too: a flat six-spoked wheel's,
+#: through a view tilted 57 degrees, 1.48 times too fast, from +-24% to +-5%; such a reading tells
+#: no count of returns: :data:`rotrate_cli.stages.verdict.COUNT_SCORE`.)
 ALONG_SHARE = 0.5
 NEAR_LEVELS = 2.0
 #: Starts refined besides the best about the given centre (apart from it and each other): the

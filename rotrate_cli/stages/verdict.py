@@ -465,13 +465,20 @@ def _closer_by_angle(period: Period, omega: float, low: float, high: float,
         return None  # the clip holds a second return (or could): the return is the closer measure
     if _half_width(omega, low, high) <= LOOSE_RETURN and callable(angle) and period.excess <= LOOK_ALIKE_EXCESS:
         return None  # close enough: the angle (seconds to measure) would seldom be closer
-    measured = angle() if callable(angle) else angle
-    if measured is None or measured.alike_deg is not None or measured.doubt:
+    measured = _firm(angle)
+    if measured is None:
         return None  # a loose reading does not stand in for a return
     closer = (_half_width(measured.omega_rad_s, measured.omega_low_rad_s, measured.omega_high_rad_s)
               < _half_width(omega, low, high))
     agrees = measured.omega_low_rad_s <= high and low <= measured.omega_high_rad_s
     return measured if closer and agrees else None
+
+
+def _firm(angle: PictureAngle | Callable[[], PictureAngle | None] | None) -> PictureAngle | None:
+    """The picture's own angle (measured now, where ``angle`` is a call) where it is a firm reading:
+    not a turn between frames that fits two ways, nor one loosely borne out."""
+    measured = angle() if callable(angle) else angle
+    return None if measured is None or measured.alike_deg is not None or measured.doubt else measured
 
 
 def _inexact_against_angle(period: Period, low: float, high: float,
@@ -483,10 +490,10 @@ def _inexact_against_angle(period: Period, low: float, high: float,
     1.6 rad/s, 8 s, came back once after the faster one's turn, its pairs 0.40 apart beyond their
     timing, and read 1.591 within [1.583, 1.599], good, for 1.6; the picture's turning read 1.5999.
     (Measured only there: :func:`_closer_by_angle` asks it first.)"""
-    if period.excess <= LOOK_ALIKE_EXCESS or period.frames >= 2 * period.lag_frames or angle is None:
+    if period.excess <= LOOK_ALIKE_EXCESS or period.frames >= 2 * period.lag_frames:
         return None
-    measured = angle() if callable(angle) else angle
-    if measured is None or measured.alike_deg is not None or measured.doubt:
+    measured = _firm(angle)
+    if measured is None:
         return None
     apart = measured.omega_high_rad_s < low or high < measured.omega_low_rad_s
     return measured if apart else None
