@@ -61,7 +61,7 @@ bench-real: $(STAMP)
 bench-variants: $(STAMP)
 	$(BIN)/python benchmarks/bench_variants.py
 
-## bench-variants-parts: each of those copies cut to 0.3 and 0.6 of a turn from 2 s and 0.9 from 8 s (84 parts, about 8 minutes): none called good that is off
+## bench-variants-parts: each of those copies cut to 0.3 and 0.6 of a turn from 2 s and 0.9 from 8 s (90 parts, about 12 minutes): none called good that is off
 bench-variants-parts: $(STAMP)
 	$(BIN)/python benchmarks/bench_variants.py --parts
 
