@@ -59,6 +59,9 @@ def _rate_from_text(analysis: Analysis) -> str:
     if analysis.rate_from == "turning":
         if analysis.verdict is not None and analysis.verdict.thin_part:
             return "the picture's turning: a thin part's angle (a hand, a needle) against the still picture"
+        if analysis.verdict is not None and analysis.verdict.plane_changes:
+            return ("the picture's turning: its changes unrolled through the plane the tracks turn as one, "
+                    "through any view")
         if analysis.verdict is not None and analysis.verdict.plane:
             return "the picture's turning: the tracks as one plane turning about its axis, through any view"
         return "the picture's turning: its angle about the axis, frame by frame"

@@ -149,6 +149,8 @@ class PictureAngle:
             both readings, and a result from it is weak.
         plane_tracks: with ``plane``, the tracks (their numbers in the tracks table) that lay on
             the plane in the pairs of frames it was read from: those that stand behind the rate.
+        plane_changes: with ``plane``, True where the rate and angles are the picture's changes
+            unrolled through the tracks' plane (:func:`rate_through_map`), not the tracks' own.
     """
 
     omega_rad_s: float
@@ -168,6 +170,7 @@ class PictureAngle:
     plane_map: PlaneMap | None = None
     doubt: str = ""
     plane_tracks: tuple[int, ...] = ()
+    plane_changes: bool = False
 
 
 class AngleFrames:
@@ -326,12 +329,29 @@ def _readings(changes: list[_Change], views: list[Candidate]) -> list[PictureAng
     return readings
 
 
+@dataclass(frozen=True)
+class MapReading:
+    """The picture's changes unrolled through the tracks' plane (:func:`rate_through_map`).
+
+    Attributes:
+        omega_rad_s: the rate (a magnitude), rad/s; ``half_rad_s``: its 95% interval's half.
+        times_s, angles_deg: the angle turned (signed, from the first change) at each change chained.
+        turned_deg: the angle turned over the changes chained (a magnitude).
+    """
+
+    omega_rad_s: float
+    half_rad_s: float
+    times_s: np.ndarray
+    angles_deg: np.ndarray
+    turned_deg: float
+
+
 def rate_through_map(kept: list[tuple[int, float, np.ndarray]], plane_map: PlaneMap,
-                     width_px: int) -> tuple[float, float] | None:
-    """The rate (rad/s, a magnitude) and its 95% interval's half of the picture's changes (from
-    the frames ``kept``, :class:`AngleFrames`) unrolled through ``plane_map`` (the tracks'
-    picture, ``width_px`` wide) rather than a view found from the picture; None where they tell
-    none: the picture's own check of the tracks' plane."""
+                     width_px: int) -> MapReading | None:
+    """The rate of the picture's changes (from the frames ``kept``, :class:`AngleFrames`) unrolled
+    through ``plane_map`` (the tracks' picture, ``width_px`` wide) rather than a view found from
+    the picture, with its chained angles; None where they tell none: the picture's own check of
+    the tracks' plane, and its turn measured without the tracks' sliding."""
     changes = _changes(kept)
     if len(changes) < MIN_CHANGES:
         return None
@@ -343,12 +363,13 @@ def rate_through_map(kept: list[tuple[int, float, np.ndarray]], plane_map: Plane
     if chain is None:
         return None
     times, angles = chain[0], chain[1]
-    if abs(angles[-1] - angles[0]) < MIN_TURNED_DEG:
+    turned = float(abs(angles[-1] - angles[0]))
+    if turned < MIN_TURNED_DEG:
         return None
     rate, scatter = _rate_of(changes, correlate, times, angles)
     if not math.isfinite(rate):
         return None
-    return math.radians(abs(rate)), math.radians(1.96 * scatter)
+    return MapReading(math.radians(abs(rate)), math.radians(1.96 * scatter), times, angles, turned)
 
 
 def _clearly_short(angle: PictureAngle, best: PictureAngle) -> bool:

@@ -307,6 +307,8 @@ class Verdict:
             still picture (a clock's hand: :mod:`rotrate_cli.scene.hand`).
         plane: with the picture's turning, True where it is the tracks' as one plane turning
             (:mod:`rotrate_cli.scene.plane_turn`).
+        plane_changes: with ``plane``, True where the rate is the picture's changes unrolled through
+            the tracks' plane rather than the tracks' own pairs of frames.
     """
 
     omega_rad_s: float
@@ -320,6 +322,7 @@ class Verdict:
     repeats_told_by: str = ""
     thin_part: bool = False
     plane: bool = False
+    plane_changes: bool = False
 
 
 def _half_width(omega: float, low: float, high: float) -> float:
@@ -369,7 +372,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
         if tracks is not None and 0 < tracks.omega_rad_s < math.inf:
             told = replace(told, spanned_by=(tracks.omega_low_rad_s, tracks.omega_high_rad_s))
     omega, low, high = period.omega_rad_s(repeats)
-    rate_from, spanned, thin_part, plane = "repetition", False, False, False
+    rate_from, spanned, thin_part, plane, plane_changes = "repetition", False, False, False, False
     if not confirmed:  # the interval holds every count of repeats a turn still open: weak for that already
         low = min(low, period.omega_rad_s(max(told.candidates))[1])
         high = max(high, period.omega_rad_s(min(told.candidates))[2])
@@ -427,7 +430,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                          f"{high:.4g}] for a turn); its own turning, measured more closely over the clip, agrees "
                          "and gives the rate")
             omega, low, high, rate_from = closer.omega_rad_s, closer.omega_low_rad_s, closer.omega_high_rad_s, "turning"
-            thin_part, plane = closer.thin_part, closer.plane
+            thin_part, plane, plane_changes = closer.thin_part, closer.plane, closer.plane_changes
         else:
             against = _inexact_against_angle(period, low, high, angle)
             if against is not None:
@@ -443,7 +446,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not spanned:  # spanned: weak for its doubt already
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, rate_from, repeats, "weak" if weak else "good", tuple(weak), tuple(notes),
-                   told.told_by if confirmed else "", thin_part, plane)
+                   told.told_by if confirmed else "", thin_part, plane, plane_changes)
 
 
 #: A return seen once whose interval is narrower than this (half, of its rate) is not set against
@@ -606,6 +609,8 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
              f"the rate is the picture's own turning: a thin part (a hand, a needle) against the clip's still picture, "
              f"{angle.turned_deg:.0f} degrees seen turned (its plane tilted {angle.view.tilt_deg:.0f} degrees, as its "
              "length shows)" if angle.thin_part else
+             f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, its changes unrolled "
+             "through the plane the tracks turn as one about its axis (through any view)" if angle.plane_changes else
              f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, the tracks fitted as "
              "one plane turning about its axis (through any view)"]
     # the ``doubts`` are of the tracks' rate: told only where it is the one reported
@@ -667,4 +672,4 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not weak:
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, "turning", 1, "weak" if weak else "good", tuple(weak), tuple(notes),
-                   thin_part=angle.thin_part, plane=angle.plane)
+                   thin_part=angle.thin_part, plane=angle.plane, plane_changes=angle.plane_changes)
