@@ -84,6 +84,15 @@ def picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFram
     return min(readings, key=_half_width) if readings else None
 
 
+#: The plane's tracks slide on a turning picture (see :func:`_weighed`): its rate moved by 0.4-0.85%
+#: on face-on renders of real photographs. Where its interval's half is narrower than this share of
+#: its rate, the slide matters, and the picture's changes through it give the rate; where wider,
+#: the interval holds the slide, and the plane is loosely known, so the changes through it are no
+#: better (printed discs before a 45-degree lens, their axis out of the frame, tilted 45 and 60
+#: degrees: their planes -0.17% within +-2.4% and -0.21% within +-1.4%, the changes through them
+#: -1.1% and -2.0%).
+SLIDING = 0.01
+
 #: A plane the picture's changes bear out only loosely is still a reading (weak, its interval
 #: holding theirs) where that interval's larger half is within this share of its rate: printed
 #: discs tilted 40 and 65 degrees, +-11% and +-6.5%; an EPFL car's side on its turntable, whose
@@ -114,14 +123,14 @@ def _weighed(plane: PictureAngle, kept: list[tuple[int, float, np.ndarray]], wid
     and +0.2% from their planes (the changes through them -3.6% +-7% and -3.5% +-3%), against
     +43% and +34% from the picture's changes through the view their paths tell, intervals missing.
 
-    Where the changes bear the plane out and tell its turn more closely, theirs is the rate (and
-    the angles, for omega(t)), within the plane's interval (the view they are unrolled through is
-    known no better): Lucas-Kanade follows a window by its translation alone, and on a turning
-    picture each step misses by the turn times the offset of the window's texture from its centre,
-    so the tracks slide (:mod:`rotrate_cli.scene.patches`). A car photograph turning face on, 0.4 of
-    a turn at 1.2 rad/s: its tracks' steps about the true axis read a median -0.4% (-3% to +8% by
-    radius), the plane's pairs -0.50% within [-0.89%, -0.11%] (missing, good), the changes through
-    it +0.01% within +-0.08%."""
+    Where the changes bear the plane out and tell its turn more closely, and the plane is known within
+    :data:`SLIDING`, theirs is the rate (and the angles, for omega(t)), within the plane's interval (the
+    view they are unrolled through is known no better): Lucas-Kanade follows a window by its translation
+    alone, and on a turning picture each step misses by the turn times the offset of the window's
+    texture from its centre, so the tracks slide (:mod:`rotrate_cli.scene.patches`). A car photograph
+    turning face on, 0.4 of a turn at 1.2 rad/s: its tracks' steps about the true axis read a median
+    -0.4% (-3% to +8% by radius), the plane's pairs -0.50% within [-0.89%, -0.11%] (missing, good), the
+    changes through it +0.01% within +-0.08%."""
     if plane.plane_map is None:
         return None
     seen = rate_through_map(kept, plane.plane_map, width_px)
@@ -131,9 +140,10 @@ def _weighed(plane: PictureAngle, kept: list[tuple[int, float, np.ndarray]], wid
     plane_half = 0.5 * (plane.omega_high_rad_s - plane.omega_low_rad_s)
     if half <= WEAK_HALF_WIDTH * rate and abs(rate - plane.omega_rad_s) <= math.hypot(max(half, plane_half),
                                                                                        plane_half):
-        if half < plane_half:
-            # they bear it out and tell its turn more closely: theirs is the rate, the tracks' plane
-            # its view (the tracks slide: see below)
+        if half < plane_half < SLIDING * plane.omega_rad_s:
+            # they bear it out and tell its turn more closely, and the plane is known closely
+            # enough for its tracks' slide to matter: theirs is the rate, the tracks' plane its
+            # view (see below)
             return replace(plane, omega_rad_s=rate, omega_low_rad_s=max(0.0, rate - plane_half),
                            omega_high_rad_s=rate + plane_half, times_s=seen.times_s, angles_deg=seen.angles_deg,
                            turned_deg=seen.turned_deg, plane_changes=True)
