@@ -52,6 +52,32 @@ def test_a_return_alone_that_also_came_back_sooner_may_span_several_turns() -> N
     assert told.quality == "good" and told.omega_high_rad_s < 1.01 * 2 * math.pi / 8.849
 
 
+def test_a_return_that_came_back_sooner_is_not_taken_for_one_turn_on_the_turning_test_alone() -> None:
+    """The bicycle wheel under a light swelling and fading 8% every 3.3 s: its picture came back
+    best after 11.08 s (four turns), less alike after 2.77 s; the turning test, whose trials are a
+    turn a return at most, told one turn: -75%, good. The test alone no longer tells it: weak, the
+    interval up to several turns; the picture's own angle, where it reads four turns' rate, tells."""
+    period = replace(_return(period_s=11.08, repeats=1, frames=417), sooner_s=2.772, lag_frames=332.4)
+    one_turn = 2 * math.pi / period.period_s
+    turning = PictureTurning(one_turn / 0.9, one_turn, one_turn / 0.9, 1, 27, 10)  # its fastest trials
+    alone = judge(None, period, turning=turning)
+    assert alone.quality == "weak" and alone.omega_high_rad_s >= 4 * one_turn
+    assert any("came back sooner too (2.772 s)" in why for why in alone.weak_because)
+
+    def angle(omega: float, score: float = 0.64) -> PictureAngle:
+        return PictureAngle(omega, omega * 0.998, omega * 1.002, 1, np.zeros(8), np.zeros(8), 1767.0, score,
+                            DiscView((200.0, 160.0), 0.0, 0.0, math.inf))
+
+    told = judge(None, period, turning=turning, angle=lambda: angle(4 * one_turn * 0.9996))
+    assert told.quality == "good" and told.rate_from == "repetition"
+    assert told.omega_rad_s == pytest.approx(4 * one_turn)
+    assert told.omega_low_rad_s < 4 * one_turn < told.omega_high_rad_s
+    assert any("spans 4 turns" in note for note in told.notes)
+    # an angle that lines up poorly, or reads a rate no count of turns gives, tells nothing
+    assert judge(None, period, turning=turning, angle=lambda: angle(4 * one_turn, 0.3)).quality == "weak"
+    assert judge(None, period, turning=turning, angle=lambda: angle(3.5 * one_turn)).quality == "weak"
+
+
 @pytest.mark.parametrize("count", [1, 2, 3, 5, 8, 16])
 def test_tracks_that_fit_one_count_decide_it(count: int) -> None:
     period = _return()
