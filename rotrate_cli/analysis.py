@@ -372,6 +372,8 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         period = turns_between(period, tracks_rate, combined.tracks_used)
     verdict = judge(tracks_rate, period, combined.tracks_used, checked.doubts,
                     turning=lambda: _picture_turning(footage, geometry, view_tracks, period), angle=angle)
+    if period is not None and verdict.turns_spanned > 1:  # the return found spans several turns
+        period = period.over(verdict.turns_spanned * period.turns_between)
     if verdict.rate_from == "turning" and measured.get("angle") is not None:
         # the axis the rate was measured about: the picture's turning's, not the tracks'
         geometry = replace(geometry, fixation_px=measured["angle"].view.centre_px)  # type: ignore[union-attr]

@@ -72,7 +72,7 @@ def test_a_return_that_came_back_sooner_is_not_taken_for_one_turn_on_the_turning
     assert told.quality == "good" and told.rate_from == "repetition"
     assert told.omega_rad_s == pytest.approx(4 * one_turn)
     assert told.omega_low_rad_s < 4 * one_turn < told.omega_high_rad_s
-    assert any("spans 4 turns" in note for note in told.notes)
+    assert any("spans 4 turns" in note for note in told.notes) and told.turns_spanned == 4
     # an angle that lines up poorly, or reads a rate no count of turns gives, tells nothing
     assert judge(None, period, turning=turning, angle=lambda: angle(4 * one_turn, 0.3)).quality == "weak"
     assert judge(None, period, turning=turning, angle=lambda: angle(3.5 * one_turn)).quality == "weak"

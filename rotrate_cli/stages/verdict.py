@@ -309,6 +309,8 @@ class Verdict:
             (:mod:`rotrate_cli.scene.plane_turn`).
         plane_changes: with ``plane``, True where the rate is the picture's changes unrolled through
             the tracks' plane rather than the tracks' own pairs of frames.
+        turns_spanned: with the repetition, how many turns the return found spans, where the
+            picture's own angle told more than one (the returns between spoiled); 1 otherwise.
     """
 
     omega_rad_s: float
@@ -323,6 +325,7 @@ class Verdict:
     thin_part: bool = False
     plane: bool = False
     plane_changes: bool = False
+    turns_spanned: int = 1
 
 
 def _half_width(omega: float, low: float, high: float) -> float:
@@ -461,7 +464,8 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
     if _half_width(omega, low, high) > WEAK_HALF_WIDTH and not spanned:  # spanned: weak for its doubt already
         weak.append(f"the 95% interval is wider than +-{WEAK_HALF_WIDTH:.0%}")
     return Verdict(omega, low, high, rate_from, repeats, "weak" if weak else "good", tuple(weak), tuple(notes),
-                   told.told_by if confirmed else "", thin_part, plane, plane_changes)
+                   told.told_by if confirmed else "", thin_part, plane, plane_changes,
+                   spans if spans is not None and rate_from == "repetition" else 1)
 
 
 #: A return seen once whose interval is narrower than this (half, of its rate) is not set against
