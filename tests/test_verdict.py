@@ -78,6 +78,31 @@ def test_a_return_that_came_back_sooner_is_not_taken_for_one_turn_on_the_turning
     assert judge(None, period, turning=turning, angle=lambda: angle(3.5 * one_turn)).quality == "weak"
 
 
+def test_an_angle_that_no_count_of_the_return_gives_is_held_and_over_a_turn_reported() -> None:
+    """The bicycle wheel under a light swelling 5% once a second: its picture came back best after
+    2.99 s (three of the light's swells, about a turn), nothing told the count, and it read -7.6%,
+    weak, its interval missing. Its angle over 4.9 turns read 2.2662 within +-0.2%, which no count
+    of a 2.99-s return gives: the interval holds it, and, followed over a turn or more, it is the
+    rate reported (still weak: the two disagree)."""
+    period = _return(period_s=2.99, repeats=4, frames=417)
+
+    def angle(turned_deg: float) -> PictureAngle:
+        return PictureAngle(2.2662, 2.2617, 2.2708, 1, np.zeros(8), np.zeros(8), turned_deg, 0.6,
+                            DiscView((200.0, 160.0), 0.0, 0.0, math.inf))
+
+    long = judge(None, period, angle=lambda: angle(1767.0))
+    assert long.quality == "weak" and long.rate_from == "turning" and long.omega_rad_s == 2.2662
+    assert long.omega_low_rad_s <= 2.2617 and long.omega_high_rad_s >= 2.2708
+    assert any("no count of the picture's returns gives" in why for why in long.weak_because)
+    short = judge(None, period, angle=lambda: angle(200.0))  # under a turn: held, not reported
+    assert short.quality == "weak" and short.rate_from == "repetition" and short.omega_high_rad_s >= 2.2708
+    # an angle that fits a count tells it, as before
+    fits = judge(None, period, angle=lambda: replace(angle(1767.0), omega_rad_s=2 * math.pi / 2.99,
+                                                     omega_low_rad_s=2 * math.pi / 2.995,
+                                                     omega_high_rad_s=2 * math.pi / 2.985))
+    assert fits.quality == "good" and fits.rate_from == "repetition"
+
+
 @pytest.mark.parametrize("count", [1, 2, 3, 5, 8, 16])
 def test_tracks_that_fit_one_count_decide_it(count: int) -> None:
     period = _return()

@@ -105,6 +105,8 @@ class Repeats:
         spanned_by: where the evidence disagrees with every count, the tracks' interval, which
             the reported interval also holds; None otherwise.
         untold: nothing but the return itself was measured (no track's rate, no turning).
+        against: the picture's own angle where it was measured, is a firm reading, and its rate
+            is no count's of the return (:func:`_angle_apart`); None otherwise.
     """
 
     repeats: int
@@ -115,6 +117,7 @@ class Repeats:
     weak: tuple[str, ...] = ()
     spanned_by: tuple[float, float] | None = field(default=None)
     untold: bool = False
+    against: PictureAngle | None = None
 
 
 def counts_within(period: Period, low_rad_s: float, high_rad_s: float, most: int = MOST_TOLD) -> list[int]:
@@ -250,10 +253,13 @@ def tell_repeats(period: Period, tracks: Combined | None, tracks_used: int,
     return_s = f"the picture comes back every {period.period_s:.4g} s"
     by_tracks = _by_tracks(period, tracks, tracks_used)
     by_turning = None
+    against = None
     if by_tracks is None or len(by_tracks) != 1:
         by_turning = _by_turning(period, turning() if callable(turning) else turning)
         if by_turning is None:  # the picture's angle, measured densely (slower), where the test said nothing
-            by_turning = _count_by_angle(period, angle() if callable(angle) else angle)
+            measured = angle() if callable(angle) else angle
+            by_turning = _count_by_angle(period, measured)
+            against = _angle_apart(period, measured) if by_turning is None else None
     told = [(name, set(counts)) for name, counts in (("the tracks' rate", by_tracks),
                                                      ("the picture's turning", by_turning)) if counts is not None]
     if not told:
@@ -263,7 +269,7 @@ def tell_repeats(period: Period, tracks: Combined | None, tracks_used: int,
             f"{return_s}, but nothing tells whether that is a whole turn or a part of one (a body that looks "
             f"alike n times a turn, such as a fan, spokes or a pattern, comes back n times): the rate is "
             f"{_listed(period, counts)} rad/s for k repeats a turn; the 95% interval holds them all{said}",),
-            untold=True)
+            untold=True, against=against)
     common = set.intersection(*(counts for _, counts in told))
     names = " and ".join(name for name, _ in told)
     if len(common) == 1:
@@ -275,7 +281,7 @@ def tell_repeats(period: Period, tracks: Combined | None, tracks_used: int,
         shown, said = _nearest_tracks(period, counts, tracks, tracks_used)
         return Repeats(shown, False, tuple(counts), weak=(
             f"{return_s}; {names} leaves open how many times a turn: {_listed(period, counts)} rad/s; the 95% "
-            f"interval holds them all{said}",))
+            f"interval holds them all{said}",), against=against)
     # the evidence fits no whole number of repeats
     said = "; ".join(f"{name} allows k = {', '.join(map(str, sorted(c)))}" if c else f"{name} fits no whole number"
                      for name, c in told)
@@ -287,7 +293,7 @@ def tell_repeats(period: Period, tracks: Combined | None, tracks_used: int,
     counts = list(range(1, MOST_REPEATS + 1))
     return Repeats(1, False, tuple(counts), weak=(
         f"{said}: the measurements disagree; {_listed(period, counts)} rad/s for k repeats a turn, and the 95% "
-        "interval holds them and the tracks' rate",), spanned_by=spanned)
+        "interval holds them and the tracks' rate",), spanned_by=spanned, against=against)
 
 
 @dataclass(frozen=True)
@@ -382,6 +388,21 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
         spanned = True
         if told.spanned_by is not None:
             low, high = min(low, told.spanned_by[0]), max(high, told.spanned_by[1])
+        if told.against is not None:
+            # the picture's own angle turns at a rate no count of the return gives: the return may be
+            # a light's or the camera's, not the body's (the bicycle wheel under a light swelling 5%
+            # once a second came back after 2.99 s, three of the light's swells, and read -7.6%, weak,
+            # missing; its angle over 4.9 turns read -0.3% within +-0.2%)
+            seen = told.against
+            low, high = min(low, seen.omega_low_rad_s), max(high, seen.omega_high_rad_s)
+            weak.append(f"the picture's own turning angle reads {seen.omega_rad_s:.4g} rad/s within "
+                        f"[{seen.omega_low_rad_s:.4g}, {seen.omega_high_rad_s:.4g}], which no count of the picture's "
+                        "returns gives: the return may be a light's or the camera's rather than the body's; the 95% "
+                        "interval holds it" + (", and it is the rate reported, as it follows a turn or more"
+                                               if seen.turned_deg >= WHOLE_TURN_DEG else ""))
+            if seen.turned_deg >= WHOLE_TURN_DEG:
+                omega, rate_from = seen.omega_rad_s, "turning"
+                thin_part, plane, plane_changes = seen.thin_part, seen.plane, seen.plane_changes
     sooner = (not period.far_apart and math.isfinite(period.sooner_s)
               and (told.untold or told.told_by == "the picture's turning"))
     spans = _turns_by_angle(period, repeats, angle) if sooner else None
@@ -511,6 +532,21 @@ def _turns_by_angle(period: Period, repeats: int,
     fits = [turns for turns in range(1, _most_spanned(period) + 1)
             if low <= period.over(turns * period.turns_between).omega_rad_s(repeats)[0] <= high]
     return fits[0] if len(fits) == 1 and fits[0] > 1 else None
+
+
+#: The picture's angle followed over at least this much (degrees) is reported over a return no
+#: count of which gives its rate (:func:`_angle_apart`).
+WHOLE_TURN_DEG = 360.0
+
+
+def _angle_apart(period: Period, angle: PictureAngle | None) -> PictureAngle | None:
+    """The picture's own angle where it is a firm reading, lined up at :data:`COUNT_SCORE` or
+    better, whose interval (within :data:`TURNING_ALLOWANCE`) holds no count's rate of the
+    return at all; None otherwise."""
+    if angle is None or angle.alike_deg is not None or angle.doubt or not angle.score >= COUNT_SCORE:
+        return None
+    low, high = angle.omega_low_rad_s / (1 + TURNING_ALLOWANCE), angle.omega_high_rad_s * (1 + TURNING_ALLOWANCE)
+    return None if counts_within(period, low, high) else angle
 
 
 def _firm(angle: PictureAngle | Callable[[], PictureAngle | None] | None) -> PictureAngle | None:
