@@ -403,9 +403,9 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
             if seen.turned_deg >= WHOLE_TURN_DEG:
                 omega, rate_from = seen.omega_rad_s, "turning"
                 thin_part, plane, plane_changes = seen.thin_part, seen.plane, seen.plane_changes
-    sooner = (not period.far_apart and math.isfinite(period.sooner_s)
-              and (told.untold or told.told_by == "the picture's turning"))
-    spans = _turns_by_angle(period, repeats, angle) if sooner else None
+    sooner = not period.far_apart and math.isfinite(period.sooner_s)
+    by_turning_alone = confirmed and told.told_by == "the picture's turning"
+    spans = _turns_by_angle(period, repeats, angle) if sooner and by_turning_alone else None
     if spans is not None:
         # the picture came back sooner too, less alike, and its own angle, measured over the clip,
         # tells how many turns the return taken spans (the turning test tries a turn a return at
@@ -415,7 +415,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
         notes.append(f"the picture came back sooner too ({period.sooner_s:.4g} s), though less alike, and its own "
                      f"turning angle tells that the return taken spans {spans} turns: a turn every "
                      f"{period.period_s * repeats:.4g} s")
-    elif sooner:
+    elif sooner and (told.untold or by_turning_alone):
         # the picture came back sooner too, but less alike: the return taken may span several turns,
         # those between spoiled (the record close-up, its camera wobbling 1.5 degrees at about 1 Hz:
         # its picture came back best after 8.85 s, five turns, less alike after two and three, and
@@ -525,8 +525,8 @@ def _turns_by_angle(period: Period, repeats: int,
     less alike (measured there alone). The bicycle wheel under a light swelling and fading 8%
     every 3.3 s came back best after 11.1 s; its angle read 2.2666 rad/s within +-0.2% over its
     4.9 turns: four turns, 2.2675."""
-    measured = _firm(angle)
-    if measured is None or not measured.score >= COUNT_SCORE:
+    measured = _lined_up(angle)
+    if measured is None:
         return None
     low, high = measured.omega_low_rad_s / (1 + TURNING_ALLOWANCE), measured.omega_high_rad_s * (1 + TURNING_ALLOWANCE)
     fits = [turns for turns in range(1, _most_spanned(period) + 1)
@@ -543,10 +543,18 @@ def _angle_apart(period: Period, angle: PictureAngle | None) -> PictureAngle | N
     """The picture's own angle where it is a firm reading, lined up at :data:`COUNT_SCORE` or
     better, whose interval (within :data:`TURNING_ALLOWANCE`) holds no count's rate of the
     return at all; None otherwise."""
-    if angle is None or angle.alike_deg is not None or angle.doubt or not angle.score >= COUNT_SCORE:
+    measured = _lined_up(angle)
+    if measured is None:
         return None
-    low, high = angle.omega_low_rad_s / (1 + TURNING_ALLOWANCE), angle.omega_high_rad_s * (1 + TURNING_ALLOWANCE)
-    return None if counts_within(period, low, high) else angle
+    low, high = measured.omega_low_rad_s / (1 + TURNING_ALLOWANCE), measured.omega_high_rad_s * (1 + TURNING_ALLOWANCE)
+    return None if counts_within(period, low, high) else measured
+
+
+def _lined_up(angle: PictureAngle | Callable[[], PictureAngle | None] | None) -> PictureAngle | None:
+    """The picture's own angle where it is a firm reading (:func:`_firm`) whose changes line up
+    at :data:`COUNT_SCORE` or better: one that may tell how a return stands to the turn."""
+    measured = _firm(angle)
+    return measured if measured is not None and measured.score >= COUNT_SCORE else None
 
 
 def _firm(angle: PictureAngle | Callable[[], PictureAngle | None] | None) -> PictureAngle | None:
