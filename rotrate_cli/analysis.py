@@ -257,9 +257,10 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
             if repetition.result() is None and config.method != "fit":
                 raise
             return _repetition_only(footage, repetition.result(), config, kept, view_tracks)
-        finally:
-            footage.keyframes.clear()
-        footage = replace(footage, tracks=tracks.iloc[:0], plane_tracks=keep_for_plane(tracks))
+        # the lens is found: of the tracker's images, those the plane's turning places its tracks on stay
+        plane_tracks = keep_for_plane(tracks, footage.keyframes.indices())
+        footage.keyframes.keep_only(plane_tracks["frame"].unique())
+        footage = replace(footage, tracks=tracks.iloc[:0], plane_tracks=plane_tracks)
         del tracks  # the offsets hold what is needed: a long clip's positions need not stay
         release_free_memory()
         if stage is not None:
@@ -288,6 +289,7 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         return _result(footage, config, geometry, checked, period, view_tracks, series=series, tracks=kept)
     finally:
         footage.thumbnails.clear()
+        footage.keyframes.clear()
 
 
 def _picture_turning(footage: Footage, geometry: Geometry, view_tracks: pd.DataFrame | None,

@@ -12,6 +12,7 @@ import pytest
 
 from rotrate_cli.fitting.outliers import Combined
 from rotrate_cli.runtime.lazy import pandas as pd
+from rotrate_cli.scene.disc import DiscView
 from rotrate_cli.scene.plane_turn import keep_for_plane, plane_angle
 from rotrate_cli.stages.verdict import judge
 
@@ -249,6 +250,76 @@ def test_the_picture_bears_out_the_tracks_plane_only_at_its_own_rate() -> None:
     slow = replace(plane, omega_rad_s=0.6 * truth, omega_low_rad_s=0.59 * truth, omega_high_rad_s=0.61 * truth)
     assert _weighed(slow, kept.frames, 240) is None
     assert _weighed(replace(plane, plane_map=None), kept.frames, 240) is None
+
+
+def test_a_plane_read_from_tracks_placed_again_stands_on_its_own_and_within_the_changes_drift() -> None:
+    from dataclasses import replace
+
+    from rotrate_cli.scene.disc import PlaneMap
+    from rotrate_cli.scene.picture_angle import AngleFrames, PictureAngle
+    from rotrate_cli.stages.angle import _weighed
+
+    kept = AngleFrames()
+    for _ in kept.tap(iter(_face_on_frames(4.0, 30))):
+        pass
+    truth = math.radians(4.0 * FPS)
+    face_on = PlaneMap((0.0, 0.0), (120.0, 120.0), ((1.0, 0.0), (0.0, 1.0)), 105.0)
+    placed = PictureAngle(1.002 * truth, 1.0 * truth, 1.004 * truth, 1, np.zeros(2), np.zeros(2), 116.0, 1.0,
+                          DiscView((120.0, 120.0), 0.0, 0.0, math.inf), plane=True, plane_map=face_on,
+                          plane_placed=True)
+    # placed tracks do not slide: the changes, though closer, do not take their place
+    assert _weighed(placed, kept.frames, 240) == placed
+    assert _weighed(replace(placed, plane_placed=False), kept.frames, 240).plane_changes
+    # changes 2% from a plane read to +-0.2% bear it out all the same: they check that the plane is
+    # the body's (tracks dragged along read 16% or more off), they do not measure it
+    off = replace(placed, omega_rad_s=0.98 * truth, omega_low_rad_s=0.978 * truth, omega_high_rad_s=0.982 * truth)
+    assert _weighed(off, kept.frames, 240) == off
+    # 5% is no drift of theirs: loose, and weak
+    assert _weighed(replace(off, omega_rad_s=0.95 * truth, omega_low_rad_s=0.948 * truth,
+                            omega_high_rad_s=0.952 * truth), kept.frames, 240).doubt
+
+
+def _fine_disc_clip(path, omega: float, turns: float = 0.3) -> None:
+    """A disc finely textured (blobs 5-40 px), turning face on, its axis 110 px below a 640x360
+    frame that it fills: no still point."""
+    import cv2
+
+    rng = np.random.default_rng(5)
+    radius = 400
+    texture = np.zeros((2 * radius, 2 * radius), np.float32)
+    for cells in (20, 60, 160):
+        texture += cv2.resize(rng.random((cells, cells)).astype(np.float32), (2 * radius, 2 * radius),
+                              interpolation=cv2.INTER_CUBIC)
+    texture = (texture - texture.min()) / np.ptp(texture) * 220 + 20
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), FPS, (640, 360))
+    for frame in range(int(turns * 2 * math.pi / omega * FPS) + 1):
+        turn = cv2.getRotationMatrix2D((radius - 0.5, radius - 0.5), math.degrees(omega * frame / FPS), 1.0)
+        turn[:, 2] += np.array([320.0, 470.0]) - radius + 0.5
+        picture = cv2.warpAffine(texture, turn, (640, 360), flags=cv2.INTER_LINEAR) + rng.normal(0, 1.5, (360, 640))
+        writer.write(cv2.cvtColor(np.clip(picture, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
+    writer.release()
+
+
+def test_the_plane_is_read_from_its_tracks_placed_again_on_the_trackers_images(tmp_path) -> None:
+    # Lucas-Kanade's windows slide on a turning picture; each track's first patch matched again
+    # (affinely) on the tracker's kept images does not: the plane reads closer and knows it
+    from rotrate_cli.config import AnalysisConfig
+    from rotrate_cli.stages.tracks import read_footage
+
+    clip = tmp_path / "fine.mp4"
+    _fine_disc_clip(clip, 2.5)
+    footage = read_footage(clip, AnalysisConfig(fixation_px=None))
+    samples = keep_for_plane(footage.tracks, footage.keyframes.indices())
+    assert set(samples["frame"]) <= set(footage.keyframes.indices().tolist())
+    tracker = plane_angle(samples)
+    placed = plane_angle(samples, footage.keyframes)
+    assert tracker is not None and not tracker.plane_placed
+    assert placed is not None and placed.plane_placed
+    assert placed.omega_low_rad_s <= 2.5 <= placed.omega_high_rad_s
+    assert placed.omega_rad_s == pytest.approx(2.5, rel=0.002)
+    assert placed.omega_high_rad_s - placed.omega_low_rad_s < tracker.omega_high_rad_s - tracker.omega_low_rad_s
+    # without the images (a track file), the tracker's positions
+    assert not plane_angle(samples, None).plane_placed
 
 
 def test_a_loose_plane_makes_the_result_weak_and_does_not_stand_for_a_return() -> None:

@@ -37,7 +37,7 @@ import numpy as np
 from rotrate_cli.errors import InputError
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene.axis import unit_offset
-from rotrate_cli.scene.patches import place_again
+from rotrate_cli.scene.patches import PLACING_THREADS, place_again
 from rotrate_cli.tracking.keyframes import Keyframes
 
 #: Tracks and samples per track the fit uses: the longest tracks, evenly thinned. The shared
@@ -57,9 +57,8 @@ MIN_PLACED = 6
 PLACED_SHARE = 0.5
 #: Tracks placed again (the longest): their misfit is a fifth of the tracker's positions', so
 #: fewer do (on the accuracy suite's lenses, 80 tracks found them within 0.4 degrees of 160), and
-#: each costs about 3 ms. Placed in this many threads at once.
+#: each costs about 3 ms (placed on :data:`rotrate_cli.scene.patches.PLACING_THREADS` threads).
 MAX_PLACED_TRACKS = 96
-PLACING_THREADS = 2
 #: Samples whose offset across the line of sight exceeds this fraction of their radius (turned
 #: more than 55 degrees from facing the camera) are left out after the first fit.
 FACE_ON_LATERAL = 0.82

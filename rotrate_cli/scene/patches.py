@@ -1,4 +1,5 @@
-"""The lens fit's samples placed again by matching each track's first patch, affinely warped.
+"""Tracks' samples placed again by matching each track's first patch, affinely warped: the lens
+fit's (:mod:`rotrate_cli.scene.focal`) and the turning plane's (:mod:`rotrate_cli.scene.plane_turn`).
 
 Lucas-Kanade follows a window by its translation alone, frame to frame. On a curved surface the
 window's picture also turns, shears and shrinks as the surface turns, and the translation that
@@ -26,10 +27,12 @@ off-axis box 28.3 -> 29.4 (30), box from 30 degrees above 25.0 -> 25.2 (25); the
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 
 import cv2
 import numpy as np
 
+from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.tracking.keyframes import Keyframes
 
 #: The template is a square of 2 PATCH_HALF_PX + 1 tracking pixels about the first sample.
@@ -93,6 +96,39 @@ def place_again(keyframes: Keyframes, frame: np.ndarray, x_px: np.ndarray,
     if keyframes.camera is not None:
         out_x, out_y = keyframes.camera.undo(frame, out_x, out_y)
     return out_x, out_y
+
+
+#: OpenCV lets go of the interpreter while it matches: this many tracks are placed at once.
+PLACING_THREADS = 2
+
+
+def place_tracks(keyframes: Keyframes, samples: pd.DataFrame, most_samples: int) -> pd.DataFrame:
+    """``samples`` (``frame, time_s, track, x_px, y_px``, sorted by track then frame) at the
+    frames kept in ``keyframes``, of the longest tracks there until ``most_samples`` samples,
+    each track placed again (:func:`place_again`); the samples that did not match are left out."""
+    samples = samples[keyframes.has(samples["frame"].to_numpy())]
+    if len(samples) == 0:
+        return samples
+    track = samples["track"].to_numpy()
+    starts = np.flatnonzero(np.r_[True, track[1:] != track[:-1]])
+    counts = np.diff(np.r_[starts, len(track)])
+    order = np.argsort(-counts, kind="stable")
+    chosen = order[:max(1, int(np.searchsorted(np.cumsum(counts[order]), most_samples, side="right")))]
+    frame = samples["frame"].to_numpy()
+    x, y = samples["x_px"].to_numpy(np.float64), samples["y_px"].to_numpy(np.float64)
+
+    def place(k: int) -> tuple[np.ndarray, np.ndarray]:
+        rows = slice(starts[k], starts[k] + counts[k])
+        return place_again(keyframes, frame[rows], x[rows], y[rows])
+
+    with ThreadPoolExecutor(max_workers=PLACING_THREADS) as pool:
+        placed = list(pool.map(place, chosen))
+    rows = np.concatenate([np.arange(starts[k], starts[k] + counts[k]) for k in np.sort(chosen)])
+    by_track = dict(zip(chosen.tolist(), placed, strict=True))
+    new_x = np.concatenate([by_track[k][0] for k in np.sort(chosen).tolist()])
+    new_y = np.concatenate([by_track[k][1] for k in np.sort(chosen).tolist()])
+    out = samples.iloc[rows].assign(x_px=new_x, y_px=new_y)
+    return out[np.isfinite(new_x) & np.isfinite(new_y)].reset_index(drop=True)
 
 
 def _inside(image: np.ndarray, x: float, y: float, margin: int) -> bool:

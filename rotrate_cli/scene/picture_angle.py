@@ -151,6 +151,8 @@ class PictureAngle:
             the plane in the pairs of frames it was read from: those that stand behind the rate.
         plane_changes: with ``plane``, True where the rate and angles are the picture's changes
             unrolled through the tracks' plane (:func:`rate_through_map`), not the tracks' own.
+        plane_placed: with ``plane``, True where its tracks were placed again on the tracker's
+            images (:func:`rotrate_cli.scene.plane_turn.plane_angle`): they do not slide.
     """
 
     omega_rad_s: float
@@ -171,6 +173,7 @@ class PictureAngle:
     doubt: str = ""
     plane_tracks: tuple[int, ...] = ()
     plane_changes: bool = False
+    plane_placed: bool = False
 
 
 class AngleFrames:

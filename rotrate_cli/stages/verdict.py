@@ -691,8 +691,9 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
              "length shows)" if angle.thin_part else
              f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, its changes unrolled "
              "through the plane the tracks turn as one about its axis (through any view)" if angle.plane_changes else
-             f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, the tracks fitted as "
-             "one plane turning about its axis (through any view)"]
+             f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, the tracks "
+             f"{'(each matched again against its first patch) ' if angle.plane_placed else ''}fitted as one plane "
+             "turning about its axis (through any view)"]
     # the ``doubts`` are of the tracks' rate: told only where it is the one reported
     if angle.alike_deg is not None and angle.first_step_deg != 0:
         other = omega * _other_steps(angle)[0]

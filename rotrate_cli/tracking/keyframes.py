@@ -1,5 +1,5 @@
-"""Some of the tracker's own images, kept evenly over the clip: for the lens's fit, which places
-its samples again on them (:mod:`rotrate_cli.scene.patches`).
+"""Some of the tracker's own images, kept evenly over the clip: for the lens's fit and the plane's
+turning, which place their samples again on them (:mod:`rotrate_cli.scene.patches`).
 
 A tap on the stream of reduced grey frames (as :class:`rotrate_cli.stages.period.Thumbnails` is): every
 ``step``-th frame is kept, and when the kept images pass :data:`MAX_BYTES` the step doubles and
@@ -54,6 +54,15 @@ class Keyframes:
     def has(self, frames: np.ndarray) -> np.ndarray:
         """Which of ``frames`` (indices) have an image kept."""
         return np.isin(frames, np.fromiter(self._images, dtype=np.int64, count=len(self._images)))
+
+    def indices(self) -> np.ndarray:
+        """The frames (indices) whose images are kept, in order."""
+        return np.array(sorted(self._images), dtype=np.int64)
+
+    def keep_only(self, frames: np.ndarray) -> None:
+        """Let go of every image but those of ``frames`` (indices)."""
+        wanted = {int(frame) for frame in frames}
+        self._images = {kept: picture for kept, picture in self._images.items() if kept in wanted}
 
     def image(self, frame: int) -> np.ndarray:
         return self._images[int(frame)]
