@@ -417,6 +417,9 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         # is what is said of the camera, rather than that nothing tells its motion
         said = sway_note(period) if period.sway_deg else roll_note(period.roll_deg_s)
         warnings = tuple(said if warning == NO_BACKGROUND_NOTE else warning for warning in warnings)
+    if verdict.rate_from == "turning" and reading is not None and reading.camera_turn_deg_s:
+        # the picture around the turning plane told the camera's own motion, taken out of its tracks
+        warnings = tuple(warning for warning in warnings if warning != NO_BACKGROUND_NOTE)
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
     camera = geometry.camera(size_px)

@@ -153,6 +153,9 @@ class PictureAngle:
             unrolled through the tracks' plane (:func:`rate_through_map`), not the tracks' own.
         plane_placed: with ``plane``, True where its tracks were placed again on the tracker's
             images (:func:`rotrate_cli.scene.plane_turn.plane_angle`): they do not slide.
+        camera_turn_deg_s: the camera's own turn (degrees a second, anticlockwise as the picture
+            shows it) taken out of the reading, as the picture around the plane showed it
+            (:mod:`rotrate_cli.scene.backdrop`); 0 where none was.
     """
 
     omega_rad_s: float
@@ -174,6 +177,7 @@ class PictureAngle:
     plane_tracks: tuple[int, ...] = ()
     plane_changes: bool = False
     plane_placed: bool = False
+    camera_turn_deg_s: float = 0.0
 
 
 class AngleFrames:

@@ -20,6 +20,7 @@ pairs are left out.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import cv2
@@ -98,7 +99,8 @@ def keep_for_plane(tracks: pd.DataFrame, among: np.ndarray | None = None) -> pd.
     return tracks.loc[kept, columns].reset_index(drop=True)
 
 
-def plane_angle(samples: pd.DataFrame, keyframes: Keyframes | None = None) -> PictureAngle | None:
+def plane_angle(samples: pd.DataFrame, keyframes: Keyframes | None = None,
+                steady: Callable[[pd.DataFrame], pd.DataFrame] | None = None) -> PictureAngle | None:
     """The plane's turning angle and rate from its tracks (:func:`keep_for_plane`; see the
     module's notes); None where too few pairs of frames show a plane turning.
 
@@ -109,14 +111,18 @@ def plane_angle(samples: pd.DataFrame, keyframes: Keyframes | None = None) -> Pi
     alone; on a turning picture each step misses by the turn times the offset of the window's
     texture from its centre, and the tracks slide. On 17 renders of real photographs turning face
     on and tilted 45-75 degrees, the axis in the frame and out of it, 0.15-0.6 of a turn
-    (2026-11-28), the tracker's positions read the plane -0.4% to -18% (median -1.4%), intervals
-    up to +-15%; placed again, -0.16% to +0.41% (median -0.02%), every interval covering."""
+    (2026-11-28), the tracker's positions read the plane -18% to +0.07% (median -1.4%), intervals
+    up to +-15%, 10 of 17 covering; placed again, -0.16% to +0.44% (median -0.02%), all covering.
+
+    ``steady``: the positions as a still camera would have seen them, where the camera moved
+    (:meth:`rotrate_cli.scene.backdrop.BackdropPath.steady`)."""
+    as_seen = steady if steady is not None else (lambda positions: positions)
     if keyframes is not None and len(keyframes) > 0 and len(samples) > 0:
-        placed = _plane_angle(place_tracks(keyframes, samples, PLACED_SAMPLES))
+        placed = _plane_angle(as_seen(place_tracks(keyframes, samples, PLACED_SAMPLES)))
         if placed is not None:
             # (fewer tracks, and quicker: a finely textured disc's 650 tracks took 3-5 s, 130 placed 1.2 s)
             return replace(placed, plane_placed=True)
-    return _plane_angle(samples)
+    return _plane_angle(as_seen(samples))
 
 
 def _plane_angle(samples: pd.DataFrame) -> PictureAngle | None:

@@ -13,6 +13,7 @@ import numpy as np
 from rotrate_cli.fitting.outliers import Combined
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene import hand
+from rotrate_cli.scene.backdrop import backdrop_path
 from rotrate_cli.scene.disc import DiscView
 from rotrate_cli.scene.picture_angle import PictureAngle, measure_angle, rate_through_map, window_rates
 from rotrate_cli.scene.plane_turn import keep_for_plane, plane_angle
@@ -79,17 +80,35 @@ def picture_angle(footage: Footage, geometry: Geometry, view_tracks: pd.DataFram
     # the tracks as one plane turning, through no view (a printed face turning before a short
     # lens, its axis out of the frame, where the view found from the picture is loose)
     plane = _tracks_plane(footage, kept)
+    if plane is not None and plane.camera_turn_deg_s:
+        return plane  # the other readings are of the picture as the turning camera saw it
     readings = [reading for reading in (thin, changes, plane) if reading is not None]
     return min(readings, key=_half_width) if readings else None
 
 
 def _tracks_plane(footage: Footage, kept: list[tuple[int, float, np.ndarray]]) -> PictureAngle | None:
     """The tracks as one plane turning (:func:`rotrate_cli.scene.plane_turn.plane_angle`), as the
-    picture's changes bear it out (:func:`_weighed`); None where they show none."""
+    picture's changes bear it out (:func:`_weighed`); None where they show none.
+
+    Where nothing in the picture stays still and its rim moves (``footage.background_unseen``),
+    the picture around the plane tells whether the camera turned (:mod:`rotrate_cli.scene.backdrop`);
+    where it did, the plane is read again with the camera's motion taken out of its tracks, and
+    its changes with the camera's turn taken out of them."""
     samples = (footage.plane_tracks if footage.plane_tracks is not None
                else keep_for_plane(footage.tracks, footage.keyframes.indices()))
     plane = plane_angle(samples, footage.keyframes)
-    return _weighed(plane, kept, footage.info.width_px) if plane is not None else None
+    if plane is None:
+        return None
+    if footage.background_unseen and plane.plane_map is not None and len(footage.keyframes) > 0:
+        frames = samples.groupby("frame")["time_s"].first()
+        frames = frames[footage.keyframes.has(frames.index.to_numpy())]
+        path = backdrop_path(footage.keyframes, frames.index.to_numpy(), frames.to_numpy(), plane.plane_map)
+        steadied = plane_angle(samples, footage.keyframes, path.steady) if path is not None else None
+        if path is not None and steadied is not None:
+            start_s = min(time_s for _, time_s, _ in kept) if kept else 0.0
+            kept = footage.pairs.angle_frames.turned_back(path.turn_deg_s, start_s).frames
+            plane = replace(steadied, camera_turn_deg_s=path.turn_deg_s)
+    return _weighed(plane, kept, footage.info.width_px)
 
 
 #: The plane's tracks slide on a turning picture (see :func:`_weighed`): its rate moved by 0.4-0.85%

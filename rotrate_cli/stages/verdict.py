@@ -694,6 +694,10 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
              f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, the tracks "
              f"{'(each matched again against its first patch) ' if angle.plane_placed else ''}fitted as one plane "
              "turning about its axis (through any view)"]
+    if angle.camera_turn_deg_s:
+        way = "anticlockwise" if angle.camera_turn_deg_s > 0 else "clockwise"
+        notes.append(f"the camera turned {abs(angle.camera_turn_deg_s):.2g} degrees a second ({way} as the picture "
+                     "shows it), as the picture around the plane shows it: taken out of the plane's tracks")
     # the ``doubts`` are of the tracks' rate: told only where it is the one reported
     if angle.alike_deg is not None and angle.first_step_deg != 0:
         other = omega * _other_steps(angle)[0]
