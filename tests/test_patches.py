@@ -25,6 +25,9 @@ def test_keyframes_stay_within_their_budget_and_evenly_spread() -> None:
     assert keyframes.step == 32
     assert keyframes.has(np.array([0, 32, 992, 1, 33])).tolist() == [True, True, True, False, False]
     assert int(keyframes.image(64)[0, 0]) == 64  # its own picture, not a later one's
+    assert keyframes.indices().tolist() == list(range(0, 1000, 32))
+    keyframes.keep_only(np.array([32, 64, 65]))
+    assert keyframes.indices().tolist() == [32, 64]
     keyframes.clear()
     assert len(keyframes) == 0 and keyframes.step == 1
 
@@ -64,6 +67,34 @@ def test_a_deforming_patch_is_placed_where_its_centre_went() -> None:
     assert np.isfinite(x).all()
     assert np.abs(x - truth_xy[:, 0]).max() < 0.1
     assert np.abs(y - truth_xy[:, 1]).max() < 0.1
+
+
+def test_tracks_are_placed_again_longest_first_within_a_budget_of_samples() -> None:
+    """Each track's samples placed again where its first patch went; the longest tracks first,
+    until the budget of samples; samples at frames with no image, or that do not match, left out."""
+    import pandas as pd
+
+    from rotrate_cli.scene.patches import place_tracks
+
+    texture = _texture()
+    pictures = []
+    for k in range(6):  # the picture shifts 2 px right a frame
+        matrix = np.array([[1.0, 0.0, 2.0 * k], [0.0, 1.0, 0.0]])
+        pictures.append(Frame(k, k / 30.0, np.clip(cv2.warpAffine(texture, matrix, (320, 240)), 0, 255)
+                              .astype(np.uint8)))
+    keyframes = _kept(pictures[:5])  # the sixth frame's image is not kept
+    rows = []
+    for track, (x0, y0, frames) in enumerate([(100.0, 100.0, range(6)), (200.0, 80.0, range(3)),
+                                              (150.0, 160.0, range(5))]):
+        rows += [(k, k / 30.0, track, x0 + 2.0 * k + 0.6, y0 - 0.4) for k in frames]  # 0.7 px off where it went
+    samples = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
+    placed = place_tracks(keyframes, samples, most_samples=10)
+    assert sorted(placed["track"].unique().tolist()) == [0, 2]  # 5 + 5 samples: the 3-sample track left out
+    assert 5 not in placed["frame"].tolist()
+    first = samples.groupby("track").first()
+    went = first.loc[placed["track"], "x_px"].to_numpy() + 2.0 * placed["frame"].to_numpy()
+    assert np.abs(placed["x_px"].to_numpy() - went).max() < 0.1  # where the first patch went, off as it was
+    assert len(place_tracks(keyframes, samples.iloc[:0], 10)) == 0
 
 
 def test_a_patch_that_does_not_match_is_left_out() -> None:
