@@ -33,6 +33,29 @@ def direction_seen_as(truth: dict, reported_angle_deg: float) -> str:
     return {"ccw": "cw", "cw": "ccw"}[truth["direction"]] if flip else truth["direction"]
 
 
+def blob_texture(generator: np.random.Generator, side: int, cells: tuple[int, ...]) -> np.ndarray:
+    """A photograph-like texture, ``side`` px square: random grids of ``cells`` a side, each
+    enlarged smoothly and summed (blobs at several scales), grey levels 20-240."""
+    import cv2
+
+    texture = np.zeros((side, side), np.float32)
+    for count in cells:
+        texture += cv2.resize(generator.random((count, count)).astype(np.float32), (side, side),
+                              interpolation=cv2.INTER_CUBIC)
+    return (texture - texture.min()) / np.ptp(texture) * 220 + 20
+
+
+def write_grey_clip(path: Path, pictures, size: tuple[int, int], fps: float) -> None:
+    """``pictures`` (grey, float, ``size`` = width, height) written as an MPEG-4 clip by OpenCV's
+    own writer, clipped to 0-255."""
+    import cv2
+
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
+    for picture in pictures:
+        writer.write(cv2.cvtColor(np.clip(picture, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
+    writer.release()
+
+
 def need(path: Path, what: str) -> None:
     """Skip the test, saying why, when shared data is absent (a checkout outside the workplace)."""
     if not path.exists():

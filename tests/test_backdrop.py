@@ -10,6 +10,8 @@ import math
 import numpy as np
 import pytest
 
+from tests.conftest import blob_texture, write_grey_clip
+
 FPS = 30.0
 
 
@@ -21,11 +23,7 @@ def _rolled_disc_clip(path, omega: float, roll_deg_s: float, turns: float = 0.3)
     rng = np.random.default_rng(9)
     radius, size = 110, (640, 360)
     side = 2 * radius
-    texture = np.zeros((side, side), np.float32)
-    for cells in (8, 24, 64):
-        texture += cv2.resize(rng.random((cells, cells)).astype(np.float32), (side, side),
-                              interpolation=cv2.INTER_CUBIC)
-    texture = (texture - texture.min()) / np.ptp(texture) * 220 + 20
+    texture = blob_texture(rng, side, (8, 24, 64))
     wide = (800, 520)  # the scene, larger than the picture: the rolled picture has no empty corners
     backdrop = np.full((wide[1], wide[0]), 150.0, np.float32)
     for x, y in rng.uniform((60, 60), (wide[0] - 60, wide[1] - 60), (40, 2)):
@@ -36,17 +34,18 @@ def _rolled_disc_clip(path, omega: float, roll_deg_s: float, turns: float = 0.3)
     disc = (((xx - radius + 0.5) ** 2 + (yy - radius + 0.5) ** 2) <= radius ** 2).astype(np.float32)
     place = np.array([[1.0, 0.0, wide[0] / 2 - radius], [0.0, 1.0, wide[1] / 2 - radius]])
     cover = cv2.warpAffine(disc, place, wide, flags=cv2.INTER_LINEAR)
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), FPS, size)
-    for frame in range(int(turns * 2 * math.pi / omega * FPS) + 1):
-        time_s = frame / FPS
-        turn = cv2.getRotationMatrix2D((radius - 0.5, radius - 0.5), math.degrees(omega * time_s), 1.0)
-        body = cv2.warpAffine(cv2.warpAffine(texture, turn, (side, side), flags=cv2.INTER_LINEAR), place, wide)
-        scene = backdrop * (1 - cover) + body * cover
-        camera = cv2.getRotationMatrix2D((wide[0] / 2, wide[1] / 2), roll_deg_s * time_s, 1.0)
-        camera[:, 2] -= ((wide[0] - size[0]) / 2, (wide[1] - size[1]) / 2)
-        picture = cv2.warpAffine(scene, camera, size, flags=cv2.INTER_LINEAR) + rng.normal(0, 1.0, (size[1], size[0]))
-        writer.write(cv2.cvtColor(np.clip(picture, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
-    writer.release()
+
+    def pictures():
+        for frame in range(int(turns * 2 * math.pi / omega * FPS) + 1):
+            time_s = frame / FPS
+            turn = cv2.getRotationMatrix2D((radius - 0.5, radius - 0.5), math.degrees(omega * time_s), 1.0)
+            body = cv2.warpAffine(cv2.warpAffine(texture, turn, (side, side), flags=cv2.INTER_LINEAR), place, wide)
+            scene = backdrop * (1 - cover) + body * cover
+            camera = cv2.getRotationMatrix2D((wide[0] / 2, wide[1] / 2), roll_deg_s * time_s, 1.0)
+            camera[:, 2] -= ((wide[0] - size[0]) / 2, (wide[1] - size[1]) / 2)
+            yield cv2.warpAffine(scene, camera, size, flags=cv2.INTER_LINEAR) + rng.normal(0, 1.0, (size[1], size[0]))
+
+    write_grey_clip(path, pictures(), size, FPS)
 
 
 @pytest.mark.parametrize("roll_deg_s", [3.0, -4.0])

@@ -15,6 +15,7 @@ from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene.disc import DiscView
 from rotrate_cli.scene.plane_turn import keep_for_plane, plane_angle
 from rotrate_cli.stages.verdict import judge
+from tests.conftest import blob_texture, write_grey_clip
 
 FPS = 30.0
 
@@ -111,11 +112,7 @@ def _perspective_disc_clip(path, omega: float, tilt_deg: float = 45.0, seed: int
 
     rng = np.random.default_rng(seed)
     side = 560
-    texture = np.zeros((side, side), np.float32)
-    for cells in (6, 14, 40):
-        texture += cv2.resize(rng.random((cells, cells)).astype(np.float32), (side, side),
-                              interpolation=cv2.INTER_CUBIC)
-    texture = (texture - texture.min()) / np.ptp(texture) * 220 + 20
+    texture = blob_texture(rng, side, (6, 14, 40))
     floor = cv2.resize(rng.random((24, 40)).astype(np.float32), (640, 360), interpolation=cv2.INTER_CUBIC) * 120 + 60
     yy, xx = np.mgrid[:side, :side]
     disc = ((xx - side / 2 + 0.5) ** 2 + (yy - side / 2 + 0.5) ** 2 <= (side / 2) ** 2).astype(np.float32)
@@ -123,16 +120,17 @@ def _perspective_disc_clip(path, omega: float, tilt_deg: float = 45.0, seed: int
     k = np.array([[focal, 0, centre[0]], [0, focal, centre[1]], [0, 0, 1.0]])
     plane = k @ np.array([[1.0, 0, 0], [0, math.cos(t), 0], [0, math.sin(t), focal]])
     frames = int(0.3 * 2 * math.pi / omega * FPS) + 1
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), FPS, (640, 360))
-    for frame in range(frames):
-        a = omega * frame / FPS
-        turn = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1.0]])
-        to_picture = plane @ turn @ np.array([[1.0, 0, -side / 2 + 0.5], [0, 1, -side / 2 + 0.5], [0, 0, 1]])
-        body = cv2.warpPerspective(texture, to_picture, (640, 360), flags=cv2.INTER_LINEAR)
-        cover = cv2.warpPerspective(disc, to_picture, (640, 360), flags=cv2.INTER_LINEAR)
-        picture = floor * (1 - cover) + body * cover + rng.normal(0, 1.5, cover.shape)
-        writer.write(cv2.cvtColor(np.clip(picture, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
-    writer.release()
+
+    def pictures():
+        for frame in range(frames):
+            a = omega * frame / FPS
+            turn = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1.0]])
+            to_picture = plane @ turn @ np.array([[1.0, 0, -side / 2 + 0.5], [0, 1, -side / 2 + 0.5], [0, 0, 1]])
+            body = cv2.warpPerspective(texture, to_picture, (640, 360), flags=cv2.INTER_LINEAR)
+            cover = cv2.warpPerspective(disc, to_picture, (640, 360), flags=cv2.INTER_LINEAR)
+            yield floor * (1 - cover) + body * cover + rng.normal(0, 1.5, cover.shape)
+
+    write_grey_clip(path, pictures(), (640, 360), FPS)
 
 
 def test_a_printed_disc_before_a_lens_its_axis_out_of_the_frame_reads_good(tmp_path) -> None:
@@ -286,18 +284,15 @@ def _fine_disc_clip(path, omega: float, turns: float = 0.3) -> None:
 
     rng = np.random.default_rng(5)
     radius = 400
-    texture = np.zeros((2 * radius, 2 * radius), np.float32)
-    for cells in (20, 60, 160):
-        texture += cv2.resize(rng.random((cells, cells)).astype(np.float32), (2 * radius, 2 * radius),
-                              interpolation=cv2.INTER_CUBIC)
-    texture = (texture - texture.min()) / np.ptp(texture) * 220 + 20
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), FPS, (640, 360))
-    for frame in range(int(turns * 2 * math.pi / omega * FPS) + 1):
-        turn = cv2.getRotationMatrix2D((radius - 0.5, radius - 0.5), math.degrees(omega * frame / FPS), 1.0)
-        turn[:, 2] += np.array([320.0, 470.0]) - radius + 0.5
-        picture = cv2.warpAffine(texture, turn, (640, 360), flags=cv2.INTER_LINEAR) + rng.normal(0, 1.5, (360, 640))
-        writer.write(cv2.cvtColor(np.clip(picture, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR))
-    writer.release()
+    texture = blob_texture(rng, 2 * radius, (20, 60, 160))
+
+    def pictures():
+        for frame in range(int(turns * 2 * math.pi / omega * FPS) + 1):
+            turn = cv2.getRotationMatrix2D((radius - 0.5, radius - 0.5), math.degrees(omega * frame / FPS), 1.0)
+            turn[:, 2] += np.array([320.0, 470.0]) - radius + 0.5
+            yield cv2.warpAffine(texture, turn, (640, 360), flags=cv2.INTER_LINEAR) + rng.normal(0, 1.5, (360, 640))
+
+    write_grey_clip(path, pictures(), (640, 360), FPS)
 
 
 def test_the_plane_is_read_from_its_tracks_placed_again_on_the_trackers_images(tmp_path) -> None:
