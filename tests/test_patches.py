@@ -69,9 +69,9 @@ def test_a_deforming_patch_is_placed_where_its_centre_went() -> None:
     assert np.abs(y - truth_xy[:, 1]).max() < 0.1
 
 
-def test_tracks_are_placed_again_longest_first_within_a_budget_of_samples() -> None:
-    """Each track's samples placed again where its first patch went; the longest tracks first,
-    until the budget of samples; samples at frames with no image, or that do not match, left out."""
+def test_tracks_are_placed_again_every_one_at_fewer_frames_beyond_a_budget_of_samples() -> None:
+    """Each track's samples placed again where its first patch went; beyond the budget of samples,
+    every track at every second (third, ...) frame; samples at frames with no image left out."""
     import pandas as pd
 
     from rotrate_cli.scene.patches import place_tracks
@@ -88,12 +88,14 @@ def test_tracks_are_placed_again_longest_first_within_a_budget_of_samples() -> N
                                               (150.0, 160.0, range(5))]):
         rows += [(k, k / 30.0, track, x0 + 2.0 * k + 0.6, y0 - 0.4) for k in frames]  # 0.7 px off where it went
     samples = pd.DataFrame(rows, columns=["frame", "time_s", "track", "x_px", "y_px"])
-    placed = place_tracks(keyframes, samples, most_samples=10)
-    assert sorted(placed["track"].unique().tolist()) == [0, 2]  # 5 + 5 samples: the 3-sample track left out
-    assert 5 not in placed["frame"].tolist()
+    every = place_tracks(keyframes, samples, most_samples=20)
+    assert len(every) == 13 and 5 not in every["frame"].tolist()
     first = samples.groupby("track").first()
-    went = first.loc[placed["track"], "x_px"].to_numpy() + 2.0 * placed["frame"].to_numpy()
-    assert np.abs(placed["x_px"].to_numpy() - went).max() < 0.1  # where the first patch went, off as it was
+    went = first.loc[every["track"], "x_px"].to_numpy() + 2.0 * every["frame"].to_numpy()
+    assert np.abs(every["x_px"].to_numpy() - went).max() < 0.1  # where the first patch went, off as it was
+    fewer = place_tracks(keyframes, samples, most_samples=10)  # 13 samples: every second frame
+    assert sorted(fewer["frame"].unique().tolist()) == [0, 2, 4]
+    assert sorted(fewer["track"].unique().tolist()) == [0, 1, 2]
     assert len(place_tracks(keyframes, samples.iloc[:0], 10)) == 0
 
 

@@ -104,30 +104,31 @@ PLACING_THREADS = 2
 
 def place_tracks(keyframes: Keyframes, samples: pd.DataFrame, most_samples: int) -> pd.DataFrame:
     """``samples`` (``frame, time_s, track, x_px, y_px``, sorted by track then frame) at the
-    frames kept in ``keyframes``, of the longest tracks there until ``most_samples`` samples,
-    each track placed again (:func:`place_again`); the samples that did not match are left out."""
+    frames kept in ``keyframes``, every track placed again (:func:`place_again`); where they hold
+    more than ``most_samples`` samples, at every second, third, ... of those frames (evenly over
+    the clip, every track kept: the tracks reach all over the body). The samples that did not
+    match are left out."""
     samples = samples[keyframes.has(samples["frame"].to_numpy())]
+    if len(samples) > most_samples:
+        frames = np.unique(samples["frame"].to_numpy())
+        every = math.ceil(len(samples) / most_samples)
+        samples = samples[np.isin(samples["frame"].to_numpy(), frames[::every])]
     if len(samples) == 0:
         return samples
     track = samples["track"].to_numpy()
     starts = np.flatnonzero(np.r_[True, track[1:] != track[:-1]])
-    counts = np.diff(np.r_[starts, len(track)])
-    order = np.argsort(-counts, kind="stable")
-    chosen = order[:max(1, int(np.searchsorted(np.cumsum(counts[order]), most_samples, side="right")))]
+    ends = np.r_[starts[1:], len(track)]
     frame = samples["frame"].to_numpy()
     x, y = samples["x_px"].to_numpy(np.float64), samples["y_px"].to_numpy(np.float64)
 
     def place(k: int) -> tuple[np.ndarray, np.ndarray]:
-        rows = slice(starts[k], starts[k] + counts[k])
-        return place_again(keyframes, frame[rows], x[rows], y[rows])
+        return place_again(keyframes, frame[starts[k]:ends[k]], x[starts[k]:ends[k]], y[starts[k]:ends[k]])
 
     with ThreadPoolExecutor(max_workers=PLACING_THREADS) as pool:
-        placed = list(pool.map(place, chosen))
-    rows = np.concatenate([np.arange(starts[k], starts[k] + counts[k]) for k in np.sort(chosen)])
-    by_track = dict(zip(chosen.tolist(), placed, strict=True))
-    new_x = np.concatenate([by_track[k][0] for k in np.sort(chosen).tolist()])
-    new_y = np.concatenate([by_track[k][1] for k in np.sort(chosen).tolist()])
-    out = samples.iloc[rows].assign(x_px=new_x, y_px=new_y)
+        placed = list(pool.map(place, range(len(starts))))
+    new_x = np.concatenate([placed_x for placed_x, _ in placed])
+    new_y = np.concatenate([placed_y for _, placed_y in placed])
+    out = samples.assign(x_px=new_x, y_px=new_y)
     return out[np.isfinite(new_x) & np.isfinite(new_y)].reset_index(drop=True)
 
 
