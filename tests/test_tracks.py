@@ -81,3 +81,18 @@ def test_a_camera_that_wobbles_back_to_where_it_started_moves_the_rim() -> None:
     # 12 px to and fro, two whole sways in the 4 s: the last frame is the first's
     assert rim_moves(lambda t: (12 * math.sin(math.pi * t), 9 * math.sin(math.pi * t)))
     assert not rim_moves(lambda t: (0.0, 0.0))
+
+    # a textured disc turning before the still wall, reaching the picture's foot: one side of the
+    # rim moves, as no turning camera's does (its turn was taken for the camera's)
+    disc = np.zeros((240, 320), np.float32)
+    cv2.circle(disc, (160, 250), 110, 1.0, -1)
+    face = cv2.resize(rng.random((30, 30)).astype(np.float32), (320, 240), interpolation=cv2.INTER_CUBIC) * 200 + 30
+    still = wall[40:280, 40:360].astype(np.float32)
+    kept = Thumbnails()
+    frames = []
+    for k in range(60):
+        turned = cv2.warpAffine(face, cv2.getRotationMatrix2D((160.0, 250.0), 3.0 * k, 1.0), (320, 240))
+        frames.append(Frame(k, k / 30.0, (still * (1 - disc) + turned * disc).astype(np.uint8)))
+    for _ in kept.tap(iter(frames)):
+        pass
+    assert not tracks._rim_moves(kept)
