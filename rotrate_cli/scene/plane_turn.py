@@ -117,12 +117,27 @@ def plane_angle(samples: pd.DataFrame, keyframes: Keyframes | None = None,
 
     ``steady``: the positions as a still camera would have seen them, where the camera moved
     (:meth:`rotrate_cli.scene.backdrop.BackdropPath.steady`)."""
+    placed = placed_for_plane(samples, keyframes)
+    return plane_from(samples, placed, steady)
+
+
+def placed_for_plane(samples: pd.DataFrame, keyframes: Keyframes | None) -> pd.DataFrame | None:
+    """The plane's tracks placed again on ``keyframes`` (:func:`plane_angle`); None without them."""
+    if keyframes is None or len(keyframes) == 0 or len(samples) == 0:
+        return None
+    return place_tracks(keyframes, samples, PLACED_SAMPLES)
+
+
+def plane_from(samples: pd.DataFrame, placed: pd.DataFrame | None,
+               steady: Callable[[pd.DataFrame], pd.DataFrame] | None = None) -> PictureAngle | None:
+    """:func:`plane_angle` from the tracks ``placed`` again (:func:`placed_for_plane`) where they
+    show a plane, else from the tracker's ``samples``."""
     as_seen = steady if steady is not None else (lambda positions: positions)
-    if keyframes is not None and len(keyframes) > 0 and len(samples) > 0:
-        placed = _plane_angle(as_seen(place_tracks(keyframes, samples, PLACED_SAMPLES)))
-        if placed is not None:
-            # (fewer tracks, and quicker: a finely textured disc's 650 tracks took 3-5 s, 130 placed 1.2 s)
-            return replace(placed, plane_placed=True)
+    if placed is not None and len(placed) > 0:
+        reading = _plane_angle(as_seen(placed))
+        if reading is not None:
+            # (fewer samples, and quicker: a finely textured disc's 650 tracks took 3-5 s, placed 1.2 s)
+            return replace(reading, plane_placed=True)
     return _plane_angle(as_seen(samples))
 
 

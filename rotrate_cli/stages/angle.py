@@ -16,7 +16,7 @@ from rotrate_cli.scene import hand
 from rotrate_cli.scene.backdrop import backdrop_path
 from rotrate_cli.scene.disc import DiscView
 from rotrate_cli.scene.picture_angle import PictureAngle, measure_angle, rate_through_map, window_rates
-from rotrate_cli.scene.plane_turn import keep_for_plane, plane_angle
+from rotrate_cli.scene.plane_turn import keep_for_plane, placed_for_plane, plane_from
 from rotrate_cli.scene.sense import not_side_view
 from rotrate_cli.scene.view import view_from_paths
 from rotrate_cli.stages.geometry import Geometry
@@ -96,14 +96,15 @@ def _tracks_plane(footage: Footage, kept: list[tuple[int, float, np.ndarray]]) -
     its changes with the camera's turn taken out of them."""
     samples = (footage.plane_tracks if footage.plane_tracks is not None
                else keep_for_plane(footage.tracks, footage.keyframes.indices()))
-    plane = plane_angle(samples, footage.keyframes)
+    placed = placed_for_plane(samples, footage.keyframes)
+    plane = plane_from(samples, placed)
     if plane is None:
         return None
     if footage.background_unseen and plane.plane_map is not None and len(footage.keyframes) > 0:
         frames = samples.groupby("frame")["time_s"].first()
         frames = frames[footage.keyframes.has(frames.index.to_numpy())]
         path = backdrop_path(footage.keyframes, frames.index.to_numpy(), frames.to_numpy(), plane.plane_map)
-        steadied = plane_angle(samples, footage.keyframes, path.steady) if path is not None else None
+        steadied = plane_from(samples, placed, path.steady) if path is not None else None
         if path is not None and steadied is not None:
             start_s = min(time_s for _, time_s, _ in kept) if kept else 0.0
             kept = footage.pairs.angle_frames.turned_back(path.turn_deg_s, start_s).frames
