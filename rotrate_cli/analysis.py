@@ -19,6 +19,7 @@ import numpy as np
 from rotrate_cli.config import AnalysisConfig, check_config
 from rotrate_cli.errors import InputError, NoResultError
 from rotrate_cli.fitting.camera import Camera
+from rotrate_cli.fitting.orbits import TurningGroup, turning_groups
 from rotrate_cli.fitting.outliers import FEATURE_COLUMNS, Combined, RejectionConfig
 from rotrate_cli.fitting.segment import Body
 from rotrate_cli.fitting.series import rate_series, window_centres
@@ -33,7 +34,7 @@ from rotrate_cli.scene.sense import not_side_view, sense_of_turning
 from rotrate_cli.scene.turning import PictureTurning, picture_turning
 from rotrate_cli.scene.view import View, keep_for_view, view_from_paths
 from rotrate_cli.stages.angle import angle_windows, picture_angle
-from rotrate_cli.stages.bodies import measure_bodies
+from rotrate_cli.stages.bodies import another_body_seen, measure_bodies
 from rotrate_cli.stages.camera import lens_from, method_name
 from rotrate_cli.stages.checks import Checked, check_rate
 from rotrate_cli.stages.fits import (
@@ -240,6 +241,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     size_px = (footage.info.width_px, footage.info.height_px)
     if config.segment:
         return _segmented(footage, config)
+    # the tracks' orbits, while the tracks are held: where another body turns, whichever measurement rates one
+    groups = turning_groups(tracks, size_px)
     with ThreadPoolExecutor(max_workers=1, thread_name_prefix="rotrate-repetition") as pool:
         # the clip's repetition (from the thumbnails alone) is worked out beside the axis's search
         # and the first fit, on the core that decoding left idle: it is first wanted where the
@@ -256,7 +259,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         except NoResultError:
             if repetition.result() is None and config.method != "fit":
                 raise
-            return _repetition_only(footage, repetition.result(), config, kept, view_tracks)
+            return _heeding(groups, config, _repetition_only(footage, repetition.result(), config, kept,
+                                                             view_tracks))
         # the lens is found: of the tracker's images, those the plane's turning places its tracks on stay
         plane_tracks = keep_for_plane(tracks, footage.keyframes.indices())
         footage.keyframes.keep_only(plane_tracks["frame"].unique())
@@ -277,7 +281,8 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
                          clock_resolution_s=footage.info.clock_resolution_s, fps=footage.info.fps)
     if checked.result.combined.tracks_used == 0 and (period is not None or config.method == "fit"):
         footage.thumbnails.clear()
-        return _repetition_only(footage, period, config, kept, view_tracks, checked.result, geometry)
+        return _heeding(groups, config, _repetition_only(footage, period, config, kept, view_tracks, checked.result,
+                                                         geometry))
     series = None
     if config.window_s is not None:
         series = rate_series(checked.result.offsets, config.window_s,
@@ -286,10 +291,27 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
     if stage is not None:
         stage("weighing the tracks, the return and the picture's turning")
     try:
-        return _result(footage, config, geometry, checked, period, view_tracks, series=series, tracks=kept)
+        return _heeding(groups, config, _result(footage, config, geometry, checked, period, view_tracks,
+                                                series=series, tracks=kept))
     finally:
         footage.thumbnails.clear()
         footage.keyframes.clear()
+
+
+def _heeding(groups: tuple[TurningGroup, ...], config: AnalysisConfig, analysis: Analysis) -> Analysis:
+    """``analysis`` told of another body turning in the picture (:func:`rotrate_cli.stages.bodies.another_body_seen`),
+    and weak for it where its axis was found, not given."""
+    seen = another_body_seen(groups, analysis.omega_rad_s, analysis.fixation_px, config.fixation_px is not None)
+    if seen is None or analysis.verdict is None:
+        return analysis
+    verdict = analysis.verdict
+    warnings = tuple(warning for warning in analysis.warnings if not warning.startswith("weak evidence: "))
+    if seen.weak_because:
+        verdict = replace(verdict, quality="weak", weak_because=(*verdict.weak_because, seen.weak_because))
+    warnings += (seen.note,)
+    if verdict.quality == "weak":
+        warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
+    return replace(analysis, verdict=verdict, warnings=warnings)
 
 
 def _picture_turning(footage: Footage, geometry: Geometry, view_tracks: pd.DataFrame | None,

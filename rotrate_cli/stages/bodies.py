@@ -1,6 +1,7 @@
-"""Several rigid bodies in one clip (``--segment``): the tracks grouped by rate and axis
+"""Several rigid bodies in one clip: with ``--segment``, the tracks grouped by rate and axis
 (:mod:`rotrate_cli.fitting.segment`), each group measured as a body of its own (:mod:`rotrate_cli.stages.geometry`),
-and groups that measure like a larger body folded into it."""
+and groups that measure like a larger body folded into it; without it, what tells that a body other
+than the one measured turns (:func:`another_body_seen`)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import numpy as np
 
 from rotrate_cli.config import AnalysisConfig
 from rotrate_cli.errors import NoResultError
+from rotrate_cli.fitting.orbits import TurningGroup, another_body
 from rotrate_cli.fitting.segment import Body, segment_tracks, unresolved
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene import axis as axes
@@ -94,3 +96,39 @@ def distinct_bodies(measured: list, ux: float, uy: float, extent_px: float) -> t
                    for other in kept):
             kept.append(entry)
     return kept, len(measured) - len(kept)
+
+
+@dataclass(frozen=True)
+class AnotherBody:
+    """A body other than the one measured, seen turning at another rate about another axis.
+
+    Attributes:
+        group: its tracks' orbits (:class:`rotrate_cli.fitting.orbits.TurningGroup`).
+        note: what the user is told.
+        weak_because: why the result is weak for it ("" where the user gave the axis: the body
+            measured is the one meant).
+    """
+
+    group: TurningGroup
+    note: str
+    weak_because: str
+
+
+def another_body_seen(groups: tuple[TurningGroup, ...], omega_rad_s: float, fixation_px: tuple[float, float],
+                      fixation_given: bool) -> AnotherBody | None:
+    """Whether the tracks' orbits (``groups``, :func:`rotrate_cli.fitting.orbits.turning_groups`) show
+    a body other than the one measured (``omega_rad_s`` about ``fixation_px``). Where the axis was
+    found, not given, which of the two the user meant is not known: the result is weak for it
+    (two discs side by side, 1.0 and 1.6 rad/s: the faster one's return read 1.600, good, with no
+    word of the other). None where no other body shows."""
+    other = another_body(groups, omega_rad_s, fixation_px)
+    if other is None:
+        return None
+    x, y = other.centre_px
+    note = (f"another body turns in the picture: about {other.omega_rad_s:.3g} rad/s about ({x:.0f}, {y:.0f}) px, "
+            f"from {other.tracks} tracks going round it; the rate reported is the body's about "
+            f"({fixation_px[0]:.0f}, {fixation_px[1]:.0f}) px; `segment` measures each")
+    because = "" if fixation_given else ("two bodies turn at different rates, and which one is meant is not "
+                                         "known: give the one meant's `fixation_px`")
+    return AnotherBody(other, note, because)
+

@@ -1,0 +1,157 @@
+"""Each track's own orbit in the picture, and the groups of tracks that go round one centre at one
+rate: what tells that more than one body turns in a clip, whichever measurement gave the rate.
+
+A point of a body turning at ``omega`` (seen without much perspective) moves on an ellipse: its
+image x and y are each a sinusoid of that rate about the ellipse's centre, the image of the axis.
+The exact recurrence of :func:`rotrate_cli.fitting.segment.track_motion` gives each coordinate's
+rate and centre on its own; a track whose two rates agree has an orbit: a rate, a centre and a
+radius. Tracks that share the rate and the centre are one body's (:func:`turning_groups`). Seen
+from the side (one coordinate hardly moves) a track tells no centre across, and is not counted:
+only bodies whose paths open into ellipses are found here (discs, wheels, fans side by side).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rotrate_cli.fitting.segment import RATE_TOLERANCE, track_motion
+from rotrate_cli.runtime.lazy import pandas as pd
+
+#: Tracks with fewer samples than this tell no orbit (and are not looked at: a long clip's many short ones).
+MIN_SAMPLES = 12
+#: A track's shorter coordinate range must be at least this share of its longer: an ellipse, not a line.
+MIN_OPENING = 0.25
+#: Tracks whose centres lie within this share of the picture's longer side, and whose rates lie
+#: within :data:`RATE_TOLERANCE` (in log), go round one axis.
+CENTRE_TOLERANCE = 0.04
+#: The fewest tracks that make a group; the most groups sought; the most tracks compared (a subset beyond).
+MIN_GROUP = 10
+MOST_GROUPS = 6
+MOST_TRACKS = 2000
+#: A group's orbits must be at least this share of the picture's longer side (a patch that shakes
+#: in place is no body turning), and go round its centre: the tracks' directions from it spread
+#: (their mean unit vector shorter than this).
+MIN_RADIUS = 0.03
+MOST_LOPSIDED = 0.7
+
+
+@dataclass(frozen=True)
+class TurningGroup:
+    """Tracks that go round one centre at one rate.
+
+    Attributes:
+        omega_rad_s: their median rate (a magnitude), rad/s.
+        centre_px: the median centre of their orbits (x, y), picture pixels.
+        radius_px: how far out they go round it (the 90th percentile of their orbits' radii).
+        tracks: how many.
+    """
+
+    omega_rad_s: float
+    centre_px: tuple[float, float]
+    radius_px: float
+    tracks: int
+
+
+def turning_groups(tracks: pd.DataFrame, size_px: tuple[int, int]) -> tuple[TurningGroup, ...]:
+    """The groups of ``tracks`` (``frame, time_s, track, x_px, y_px``, sorted by track then frame)
+    that go round one centre at one rate, the largest first (see the module's notes)."""
+    longest = float(max(size_px))
+    track = tracks["track"].to_numpy()
+    if len(track) == 0:
+        return ()
+    ids, first, counts = np.unique(track, return_index=True, return_counts=True)
+    long_enough = np.repeat(counts >= MIN_SAMPLES, counts) if bool(np.all(np.diff(track) >= 0)) \
+        else np.isin(track, ids[counts >= MIN_SAMPLES])
+    if not long_enough.any():
+        return ()
+    rows = tracks.loc[long_enough, ["track", "frame", "time_s", "x_px", "y_px"]]
+    x, y = rows["x_px"].to_numpy(dtype=float), rows["y_px"].to_numpy(dtype=float)
+    along_x = track_motion(rows, x).set_index("track")
+    along_y = track_motion(rows, y).set_index("track")
+    both = along_x.join(along_y, lsuffix="_x", rsuffix="_y", how="inner")
+    if both.empty:
+        return ()
+    kept_ids = rows["track"].to_numpy()
+    spans = pd.DataFrame({"track": kept_ids, "x": x, "y": y}).groupby("track").agg(["min", "max", "first"])
+    spans = spans.loc[both.index]
+    range_x = (spans[("x", "max")] - spans[("x", "min")]).to_numpy()
+    range_y = (spans[("y", "max")] - spans[("y", "min")]).to_numpy()
+    rate_x, rate_y = both["omega_rad_s_x"].to_numpy(), both["omega_rad_s_y"].to_numpy()
+    opened = np.minimum(range_x, range_y) >= MIN_OPENING * np.maximum(range_x, range_y)
+    agreeing = np.abs(np.log(rate_x / rate_y)) <= RATE_TOLERANCE
+    chosen = opened & agreeing & (np.maximum(range_x, range_y) >= MIN_RADIUS * longest)
+    if chosen.sum() < MIN_GROUP:
+        return ()
+    rate = np.where(range_x >= range_y, rate_x, rate_y)[chosen]
+    centre = np.column_stack([both["axis_px_x"].to_numpy(), both["axis_px_y"].to_numpy()])[chosen]
+    start = np.column_stack([spans[("x", "first")].to_numpy(), spans[("y", "first")].to_numpy()])[chosen]
+    # each orbit's radius: half its longer range (the ellipse's long semi-axis, or the chord seen)
+    radius = (0.5 * np.maximum(range_x, range_y))[chosen]
+    if len(rate) > MOST_TRACKS:  # the comparison is quadratic: an even subset
+        keep = np.linspace(0, len(rate) - 1, MOST_TRACKS).astype(int)
+        rate, centre, start, radius = rate[keep], centre[keep], start[keep], radius[keep]
+    return _grouped(rate, centre, start, radius, longest)
+
+
+def _grouped(rate: np.ndarray, centre: np.ndarray, start: np.ndarray, radius: np.ndarray,
+             longest: float) -> tuple[TurningGroup, ...]:
+    """Mode seeking in (log rate, centre): the track with the most neighbours seeds a group of
+    them, and the search repeats on the rest."""
+    scaled_rate = np.log(rate) / RATE_TOLERANCE
+    scaled_centre = centre / (CENTRE_TOLERANCE * longest)
+    left = np.ones(len(rate), dtype=bool)
+    found: list[TurningGroup] = []
+    while len(found) < MOST_GROUPS and left.sum() >= MIN_GROUP:
+        pool = np.flatnonzero(left)
+        near = ((np.abs(scaled_rate[pool, None] - scaled_rate[None, pool]) <= 1.0)
+                & (np.abs(scaled_centre[pool, None, 0] - scaled_centre[None, pool, 0]) <= 1.0)
+                & (np.abs(scaled_centre[pool, None, 1] - scaled_centre[None, pool, 1]) <= 1.0))
+        counts = near.sum(axis=1)
+        seed = int(np.argmax(counts))
+        if counts[seed] < MIN_GROUP:
+            break
+        members = pool[near[seed]]
+        left[members] = False
+        middle = np.median(centre[members], axis=0)
+        away = start[members] - middle
+        lengths = np.hypot(away[:, 0], away[:, 1])
+        directions = away[lengths > 0] / lengths[lengths > 0, None]
+        lopsided = float(np.hypot(*directions.mean(axis=0))) if len(directions) else 1.0
+        spread = float(np.percentile(radius[members], 90))
+        if spread < MIN_RADIUS * longest or lopsided > MOST_LOPSIDED:
+            continue  # a patch shaking in place, or tracks on one side of a centre they do not go round
+        found.append(TurningGroup(float(np.median(rate[members])), (float(middle[0]), float(middle[1])), spread,
+                                  len(members)))
+    return tuple(sorted(found, key=lambda group: -group.tracks))
+
+
+#: Two rates this far apart (in log: twice the per-track tolerance) are told apart.
+RATES_APART = 2.0 * RATE_TOLERANCE
+#: The measured body's axis lies outside a group's orbits where it is farther from the group's
+#: centre than this many times their radius.
+OUTSIDE = 1.2
+
+
+def another_body(groups: tuple[TurningGroup, ...], omega_rad_s: float,
+                 fixation_px: tuple[float, float]) -> TurningGroup | None:
+    """The largest group that is another body than the one measured (``omega_rad_s`` about
+    ``fixation_px``): its rate told apart from the measured one, and the measured axis outside its
+    orbits (a rigid body's points go round its own axis). Where the measured axis is not known
+    (NaN), a group at the measured rate stands for it. None where no group is another body."""
+    if not (math.isfinite(omega_rad_s) and omega_rad_s > 0):
+        return None
+    axis = np.asarray(fixation_px, dtype=float)
+    if not np.all(np.isfinite(axis)):
+        alike = [group for group in groups if abs(math.log(group.omega_rad_s / omega_rad_s)) <= RATE_TOLERANCE]
+        if not alike:
+            return None
+        axis = np.asarray(alike[0].centre_px)
+    for group in groups:
+        apart = abs(math.log(group.omega_rad_s / omega_rad_s)) > RATES_APART
+        outside = math.dist(axis, group.centre_px) > OUTSIDE * group.radius_px
+        if apart and outside:
+            return group
+    return None
