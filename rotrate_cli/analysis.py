@@ -118,6 +118,12 @@ class Analysis:
             frame); None where none showed.
         direction_in_picture: True when the sense of turning is the one the tracks go round the
             fixation in the picture (a view from above or face on: :mod:`rotrate_cli.scene.sense`).
+        camera_turn_deg_s: the camera's own turn, degrees a second (anticlockwise as the picture
+            shows it), measured and taken out before the rate: from the picture around a turning
+            plane (:mod:`rotrate_cli.scene.backdrop`) or the roll the return needed taken out; 0
+            where none was. The view is then not read from the tracks' paths, which carry it.
+        other_body: another body seen turning at another rate about another axis
+            (:func:`rotrate_cli.stages.bodies.another_body_seen`), or None.
 
     ``samples`` (per-sample derivatives and rates, Table I) is computed when first asked for:
     a long clip's table is large, and most reports do not need it.
@@ -158,6 +164,8 @@ class Analysis:
     shake: Shake | None = None
     camera_path: CameraPath | None = None
     direction_in_picture: bool = False
+    camera_turn_deg_s: float = 0.0
+    other_body: TurningGroup | None = None
 
     @property
     def quality(self) -> str:
@@ -311,7 +319,7 @@ def _heeding(groups: tuple[TurningGroup, ...], config: AnalysisConfig, analysis:
     warnings += (seen.note,)
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
-    return replace(analysis, verdict=verdict, warnings=warnings)
+    return replace(analysis, verdict=verdict, warnings=warnings, other_body=seen.group)
 
 
 def _picture_turning(footage: Footage, geometry: Geometry, view_tracks: pd.DataFrame | None,
@@ -439,9 +447,15 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         # is what is said of the camera, rather than that nothing tells its motion
         said = sway_note(period) if period.sway_deg else roll_note(period.roll_deg_s)
         warnings = tuple(said if warning == NO_BACKGROUND_NOTE else warning for warning in warnings)
+    camera_turn = period.roll_deg_s if period is not None and verdict.rate_from == "repetition" else 0.0
     if verdict.rate_from == "turning" and reading is not None and reading.camera_turn_deg_s:
         # the picture around the turning plane told the camera's own motion, taken out of its tracks
         warnings = tuple(warning for warning in warnings if warning != NO_BACKGROUND_NOTE)
+        camera_turn = reading.camera_turn_deg_s
+    if camera_turn:
+        # the tracks' paths carry the camera's turn: a view read from them is not the body's (a
+        # face-on disc under a camera rolling 3 degrees a second read "oblique, 69 degrees")
+        geometry = replace(geometry, view=None)
     if verdict.quality == "weak":
         warnings += ("weak evidence: " + "; ".join(verdict.weak_because),)
     camera = geometry.camera(size_px)
@@ -461,6 +475,7 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
                          else config.angle_from),
         elevation_deg=geometry.elevation_deg, verdict=verdict, period=period, clock=footage.info.clock,
         camera_from=geometry.lens.source, view=geometry.view, shake=footage.shake, camera_path=footage.camera,
+        camera_turn_deg_s=float(camera_turn),
         **measured_by,  # type: ignore[arg-type]
     )
 

@@ -65,6 +65,13 @@ def test_a_camera_that_rolls_over_a_disc_before_a_plain_backdrop_is_taken_out(tm
     assert any(warning.startswith(f"the camera turned {abs(roll_deg_s):.2g} degrees a second ({way}")
                for warning in analysis.warnings), analysis.warnings
     assert not any(warning.startswith("no still background") for warning in analysis.warnings)
+    # the turn is carried in the result (and its JSON), and no view is read from paths that carry it
+    # (before: this face-on disc "oblique, 69 degrees")
+    assert analysis.camera_turn_deg_s == pytest.approx(roll_deg_s, abs=0.3)
+    assert analysis.view is None
+    from rotrate_cli.cli.report import to_dict
+
+    assert to_dict(analysis)["camera_turn_deg_s"] == pytest.approx(roll_deg_s, abs=0.3)
 
 
 def test_a_still_cameras_backdrop_shows_no_turn(tmp_path) -> None:

@@ -44,6 +44,8 @@ def _elevation_in_view(analysis: Analysis) -> bool:
 def _view_text(analysis: Analysis) -> str:
     """The view read from the tracks' paths, in words."""
     view = analysis.view
+    if view is None and analysis.camera_turn_deg_s:
+        return "unknown: the tracks' paths carry the camera's own turn"
     if view is None:
         return "unknown: too few tracks follow a turning path at the reported rate"
     lens = " (its elevation with the lens found)" if analysis.focal is not None and math.isfinite(
@@ -178,6 +180,12 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "background_tracks": analysis.shake.background_tracks,
             "turned_deg": _number(analysis.shake.turned_deg, 3), "turn_deg_s": _number(analysis.shake.turn_deg_s, 4),
             "smooth": analysis.shake.smooth,
+        },
+        "camera_turn_deg_s": _number(analysis.camera_turn_deg_s, 3),
+        "other_body": None if analysis.other_body is None else {
+            "omega": _number(analysis.other_body.omega_rad_s, 4),
+            "centre_px": [_number(v, 1) for v in analysis.other_body.centre_px],
+            "tracks": analysis.other_body.tracks,
         },
         "direction": analysis.direction,
         "direction_seen": _direction_seen(analysis),

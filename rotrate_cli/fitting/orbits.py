@@ -71,7 +71,7 @@ def turning_groups(tracks: pd.DataFrame, size_px: tuple[int, int]) -> tuple[Turn
     x, y = rows["x_px"].to_numpy(dtype=float), rows["y_px"].to_numpy(dtype=float)
     along_x = track_motion(rows, x).set_index("track")
     along_y = track_motion(rows, y).set_index("track")
-    both = along_x.join(along_y, lsuffix="_x", rsuffix="_y", how="inner")
+    both = along_x.merge(along_y, left_index=True, right_index=True, suffixes=("_x", "_y"))
     if both.empty:
         return ()
     kept_ids = rows["track"].to_numpy()

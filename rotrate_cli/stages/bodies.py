@@ -129,6 +129,6 @@ def another_body_seen(groups: tuple[TurningGroup, ...], omega_rad_s: float, fixa
             f"from {other.tracks} tracks going round it; the rate reported is the body's about "
             f"({fixation_px[0]:.0f}, {fixation_px[1]:.0f}) px; `segment` measures each")
     because = "" if fixation_given else ("two bodies turn at different rates, and which one is meant is not "
-                                         "known: give the one meant's `fixation_px`")
+                                         "known: give the axis of the one meant")
     return AnotherBody(other, note, because)
 
