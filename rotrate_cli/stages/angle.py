@@ -129,6 +129,14 @@ SLIDING = 0.01
 #: Tracks that follow something else read 16% or more from them (see :func:`_weighed`).
 BORNE_OUT = 0.03
 
+#: Where the picture's changes through the plane turn at least this many times as far as its tracks
+#: do (short tracks: dust on a record), theirs is the rate, within an interval holding both: a record
+#: rendered tilted 30 degrees, 0.3 of a turn, its plane from tracks over 20 degrees read +0.77%
+#: within +-0.5% (good, missing), its changes through it over 99 degrees -0.99% within +-0.3%; tilted
+#: 50 degrees, 0.6 of a turn, its plane over 61 degrees -11.4% within +-11%, the changes over 212
+#: degrees -0.6% within +-2.8%.
+FARTHER_TURNED = 2.0
+
 #: A plane the picture's changes bear out only loosely is still a reading (weak, its interval
 #: holding theirs) where that interval's larger half is within this share of its rate: printed
 #: discs tilted 40 and 65 degrees, +-11% and +-6.5%; an EPFL car's side on its turntable, whose
@@ -175,7 +183,21 @@ def _weighed(plane: PictureAngle, kept: list[tuple[int, float, np.ndarray]], wid
     rate, half = seen.omega_rad_s, seen.half_rad_s
     plane_half = 0.5 * (plane.omega_high_rad_s - plane.omega_low_rad_s)
     apart = max(math.hypot(max(half, plane_half), plane_half), BORNE_OUT * plane.omega_rad_s)
-    if half <= WEAK_HALF_WIDTH * rate and abs(rate - plane.omega_rad_s) <= apart:
+    borne_out = abs(rate - plane.omega_rad_s) <= apart
+    if half <= WEAK_HALF_WIDTH * rate and seen.turned_deg >= FARTHER_TURNED * plane.turned_deg:
+        # the changes through the plane see the body turn much farther than its tracks do: theirs
+        # is the rate, within an interval that holds both readings
+        low, high = min(plane.omega_low_rad_s, rate - half), max(plane.omega_high_rad_s, rate + half)
+        farther = replace(plane, omega_rad_s=rate, omega_low_rad_s=max(0.0, low), omega_high_rad_s=high,
+                          times_s=seen.times_s, angles_deg=seen.angles_deg, turned_deg=seen.turned_deg,
+                          plane_changes=True)
+        if not borne_out:
+            farther = replace(farther, doubt=f"the plane the tracks turn as one, seen over {plane.turned_deg:.0f} "
+                                             f"degrees, turns at {plane.omega_rad_s:.4g} rad/s: it bears out the "
+                                             f"picture's own changes through it, over {seen.turned_deg:.0f}, only "
+                                             "loosely")
+        return farther if _half_width(farther) <= LOOSE_PLANE else None
+    if half <= WEAK_HALF_WIDTH * rate and borne_out:
         if half < plane_half < SLIDING * plane.omega_rad_s and not plane.plane_placed:
             # they bear it out and tell its turn more closely, and the plane is known closely
             # enough for its tracks' slide to matter: theirs is the rate, the tracks' plane its
