@@ -219,3 +219,38 @@ def test_a_body_changing_by_about_a_grey_level_counts_all_its_rings() -> None:
     fast = np.r_[np.full(6, 0.6), np.full(6, 4.0), np.full(6, 0.8), np.full(30, 0.01)]
     weight = moving_weight(_ring_changes(fast), inside)
     assert weight[:, 6:12].all() and not weight[:, :6].any() and not weight[:, 12:].any()
+
+
+def test_far_shifts_that_are_no_peak_or_lie_far_off_the_others_line_are_left_out() -> None:
+    """What stays still while the body turns behind it (a tonearm, the picture's edge) peaks at no
+    shift; far apart, its slope reached into the search for the body's shift: a record rendered
+    with its axis below the frame read -14% from such shifts, its chained angles right."""
+    from rotrate_cli.scene.picture_angle import _rate_of, _with_offset
+
+    rng = np.random.default_rng(2)
+    rate = 200.0  # degrees a second
+    spans = np.linspace(0.1, 0.7, 40)
+    rows = [(span, rate * span + 0.5 + rng.normal(0, 0.1)) for span in spans]
+    clean, _ = _with_offset(rows, 40)
+    assert clean == pytest.approx(rate, rel=0.002)
+    wrong = rows + [(0.57, rate * 0.57 - 12.6), (0.53, rate * 0.53 - 4.7)]
+    assert _with_offset(wrong, 40)[0] == pytest.approx(clean, rel=0.001)
+
+    class _Change:  # what _rate_of reads of a change: its time and its place in the list
+        def __init__(self, index: int, time_s: float) -> None:
+            self.index, self.time_s = index, time_s
+
+    count, angles = 720, 40
+    changes = [_Change(i, i / 30.0) for i in range(angles)]
+    times = np.array([change.time_s for change in changes])
+    chained = rate * times
+    shifts = (np.arange(count) * (360.0 / count) + 180.0) % 360.0 - 180.0
+
+    def correlate(i: int, k: int) -> np.ndarray:
+        true = chained[k] - chained[i]
+        still = np.exp(-0.5 * (shifts / 80.0) ** 2)  # what does not turn: a broad peak at no shift
+        body = (0.2 if true > 100 else 1.0) * np.exp(-0.5 * (((shifts - true + 180) % 360 - 180) / 1.5) ** 2)
+        return body + (2.0 if true > 100 else 0.0) * still
+
+    found, _ = _rate_of(changes, correlate, times, chained)
+    assert found == pytest.approx(rate, rel=0.005)

@@ -357,3 +357,44 @@ def test_a_flat_spoked_wheel_over_a_textured_floor_is_not_read_from_its_dragged_
     analysis = analyze(clip, AnalysisConfig(fixation_px=None))
     assert analysis.verdict is None or not analysis.verdict.plane
     assert analysis.quality == "weak" or analysis.omega_rad_s == pytest.approx(1.5, rel=0.01)
+
+
+def test_changes_that_see_the_body_turn_farther_than_the_planes_tracks_give_the_rate_within_both() -> None:
+    """Short tracks (dust on a record) saw the plane turn over a fifth of what the picture's changes
+    through it show: before, the plane's +0.8% within +-0.5% (its reading floor over 20 degrees)
+    stood, good and missing."""
+    from dataclasses import replace
+
+    from rotrate_cli.scene.disc import PlaneMap
+    from rotrate_cli.scene.picture_angle import AngleFrames, PictureAngle
+    from rotrate_cli.stages.angle import _weighed
+
+    kept = AngleFrames()
+    for _ in kept.tap(iter(_face_on_frames(4.0, 30))):
+        pass
+    truth = math.radians(4.0 * FPS)
+    face_on = PlaneMap((0.0, 0.0), (120.0, 120.0), ((1.0, 0.0), (0.0, 1.0)), 105.0)
+    short = PictureAngle(1.008 * truth, 1.003 * truth, 1.013 * truth, 1, np.zeros(2), np.zeros(2), 20.0, 1.0,
+                         DiscView((120.0, 120.0), 0.0, 0.0, math.inf), plane=True, plane_map=face_on,
+                         plane_placed=True)
+    farther = _weighed(short, kept.frames, 240)
+    assert farther is not None and farther.plane_changes and not farther.doubt
+    assert farther.omega_rad_s == pytest.approx(truth, rel=0.002) and farther.turned_deg > 100
+    assert farther.omega_low_rad_s <= truth <= farther.omega_high_rad_s
+    assert farther.omega_high_rad_s >= short.omega_high_rad_s  # the interval holds the plane's too
+    # a plane from short tracks 11% slow (within +-11%): the changes' rate, within both (weak: wide)
+    slow = replace(short, omega_rad_s=0.89 * truth, omega_low_rad_s=0.78 * truth, omega_high_rad_s=0.997 * truth,
+                   turned_deg=40.0)
+    loose = _weighed(slow, kept.frames, 240)
+    assert loose is not None and loose.omega_rad_s == pytest.approx(truth, rel=0.002)
+    assert loose.omega_low_rad_s == slow.omega_low_rad_s and loose.omega_high_rad_s >= truth
+    # 30% slow and known to +-3%: not borne out, said so, and too loose for a reading at all
+    off = replace(short, omega_rad_s=0.7 * truth, omega_low_rad_s=0.68 * truth, omega_high_rad_s=0.72 * truth,
+                  turned_deg=40.0)
+    assert _weighed(off, kept.frames, 240) is None
+    near = replace(short, omega_rad_s=0.9 * truth, omega_low_rad_s=0.89 * truth, omega_high_rad_s=0.91 * truth,
+                   turned_deg=40.0)
+    loosely = _weighed(near, kept.frames, 240)
+    assert loosely is not None and loosely.doubt and loosely.omega_rad_s == pytest.approx(truth, rel=0.002)
+    # seen over as much of the turn as the changes, the plane stands as before
+    assert _weighed(replace(short, turned_deg=100.0), kept.frames, 240) == replace(short, turned_deg=100.0)
