@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DINO := ../shared/data/dinosaur
 
-.PHONY: bench-symmetry bench-turning bench-printed bench-variants-parts bench-clock docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
+.PHONY: bench-symmetry bench-turning bench-records bench-printed bench-variants-parts bench-clock docs demo test test-slow test-floor lint bench bench-memory bench-real bench-variants bench-accuracy bench-accuracy-paths bench-accuracy-csrt bench-accuracy-given-fov bench-accuracy-reseed bench-random bench-hard clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -100,6 +100,10 @@ bench-symmetry: $(STAMP)
 ## bench-turning: flat rotors rendered under a turn (0.3), face on and tilted, axis in and out of the frame (about a minute)
 bench-turning: $(STAMP)
 	$(BIN)/python benchmarks/bench_turning.py
+
+## bench-records: records under a turn (grooves alike at every angle, a photographed label, dust, a still highlight and tonearm), face on and tilted 30-65 degrees, axis in and below the frame, 0.3 and 0.6 of a turn, H.264 (renders cached in bench_out/records; about two minutes the first time; skips without ../shared)
+bench-records: $(STAMP)
+	$(BIN)/python benchmarks/bench_records.py
 
 ## bench-printed: discs printed with the shared real photographs, a third of a turn before a 45-degree lens, face on and tilted 45-72 degrees, axis in and below the frame, H.264 (renders cached in bench_out/printed; about two minutes the first time; skips without ../shared)
 bench-printed: $(STAMP)

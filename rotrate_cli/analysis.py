@@ -232,7 +232,10 @@ def _analyze(source: str | Path, config: AnalysisConfig, progress: ProgressCallb
         try:
             return _repetition_only(error.footage, None, config, None, None)
         except NoResultError:
-            raise error from None
+            # (a record tilted 65 degrees, a third of a turn at 9 degrees a frame: nothing followed,
+            # and "check that the object moves and has texture" alone misled)
+            raise NoResultError(f"{error}; the picture's own turning, measured without tracks, told no rate "
+                                "either") from None
     if footage.matched and config.rejection == RejectionConfig():
         # features matched photograph to photograph: short tracks, sampled sparsely on the turn,
         # are fitted from 5 samples (as given tracks are, :func:`analyze_tracks`): the dinosaur's
@@ -397,6 +400,11 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     if combined.tracks_used == 0 and period is None:
         # no track and no return: the picture's own turning alone, where it tells a rate
         angle = picture_angle(footage, geometry, view_tracks, None) if config.method == "fit" else None
+        if angle is None and result.features.empty and config.method == "fit":
+            # points were followed, but too few or too briefly to place the axis (a record tilted 65
+            # degrees, a third of a turn at 9 degrees a frame): not "no point could be tracked"
+            raise NoResultError("too few points were followed long enough to place the axis, and the picture's own "
+                                "turning told no rate; try a longer clip, or `roi` around the object")
         if angle is None:
             raise NoResultError(no_result_message(result.features))
         measured["angle"] = angle
