@@ -186,8 +186,10 @@ def _weighed(plane: PictureAngle, kept: list[tuple[int, float, np.ndarray]], wid
     borne_out = abs(rate - plane.omega_rad_s) <= apart
     if half <= WEAK_HALF_WIDTH * rate and seen.turned_deg >= FARTHER_TURNED * plane.turned_deg:
         # the changes through the plane see the body turn much farther than its tracks do: theirs
-        # is the rate, within an interval that holds both readings
-        low, high = min(plane.omega_low_rad_s, rate - half), max(plane.omega_high_rad_s, rate + half)
+        # is the rate, read no more closely than the plane they are unrolled through is known, within
+        # an interval that also holds the plane's reading
+        wide = max(half, plane_half)
+        low, high = min(plane.omega_low_rad_s, rate - wide), max(plane.omega_high_rad_s, rate + wide)
         farther = replace(plane, omega_rad_s=rate, omega_low_rad_s=max(0.0, low), omega_high_rad_s=high,
                           times_s=seen.times_s, angles_deg=seen.angles_deg, turned_deg=seen.turned_deg,
                           plane_changes=True)
