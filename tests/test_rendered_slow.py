@@ -51,3 +51,27 @@ def test_an_undecided_sense_does_not_read_as_a_spin_up(seed: int, tmp_path: Path
     assert result.omega_rad_s == pytest.approx(0.2, rel=0.03)
     assert result.omega_low_rad_s <= 0.2 <= result.omega_high_rad_s
     assert not any("rate changes" in line for line in result.warnings)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["out-06", "small-label-03"])
+def test_a_record_under_a_turn_with_a_still_tonearm_is_right_or_honestly_weak(name: str, tmp_path: Path) -> None:
+    """`make bench-records`' cases that failed: its axis below the frame, 0.6 of a turn, read -14%
+    (weak, missing) from far shifts found at their search's edge (the tonearm's peak reaching in);
+    a small label's dust tracks saw 20 degrees of the turn, and their plane read +0.77% within
+    +-0.5%, good, missing. Needs the shared photographs (the labels)."""
+    from benchmarks.bench_records import CASES as RECORDS
+    from benchmarks.bench_records import DATA, render
+    from tests.conftest import need
+
+    need(DATA / "epfl_cars", "the shared EPFL photographs")
+    case = next(case for case in RECORDS if case.name == name)
+    clip = tmp_path / f"{name}.mp4"
+    render(case, clip)
+    result = analyze(clip, AnalysisConfig(fixation_px=None))
+    truth = abs(case.omega_rad_s)
+    assert result.omega_low_rad_s <= truth <= result.omega_high_rad_s
+    if result.quality == "good":
+        assert result.omega_rad_s == pytest.approx(truth, rel=0.01)
+    if name == "out-06":
+        assert result.quality == "good"
