@@ -16,7 +16,6 @@ photographs are absent. Renders are cached in bench_out/printed.
 from __future__ import annotations
 
 import math
-import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,7 +26,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.scoring import footage_absent, only_option, rendered_cases  # noqa: E402
+from benchmarks.scoring import plane_before_lens, rendered_main, write_h264_grey  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 OUT = ROOT / "bench_out" / "printed"
@@ -66,8 +65,6 @@ def render(case: Case, path: Path) -> None:
     """The case's clip: the disc's photograph turned by ``omega t`` in its plane, the plane tilted
     about the picture's x axis before the lens, over the still floor, with a little sensor noise;
     H.264 (CRF 23) through imageio-ffmpeg's FFmpeg."""
-    import imageio_ffmpeg
-
     side = int(2 * case.radius_px)
     printed = cv2.imread(str(DATA / case.printed), cv2.IMREAD_GRAYSCALE)
     floor = cv2.imread(str(DATA / case.floor), cv2.IMREAD_GRAYSCALE)
@@ -77,39 +74,23 @@ def render(case: Case, path: Path) -> None:
     floor = cv2.resize(floor, (WIDTH, HEIGHT), interpolation=cv2.INTER_AREA).astype(np.float32)
     yy, xx = np.mgrid[:side, :side]
     disc = ((xx - side / 2 + 0.5) ** 2 + (yy - side / 2 + 0.5) ** 2 <= (side / 2) ** 2).astype(np.float32)
-    focal, tilt = FOCAL_WIDTHS * WIDTH, math.radians(case.tilt_deg)
-    lens = np.array([[focal, 0, case.centre[0] * WIDTH], [0, focal, case.centre[1] * HEIGHT], [0, 0, 1.0]])
-    plane = lens @ np.array([[1.0, 0, 0], [0, math.cos(tilt), 0], [0, math.sin(tilt), focal]])
-    to_centre = np.array([[1.0, 0, -side / 2 + 0.5], [0, 1, -side / 2 + 0.5], [0, 0, 1]])
+    seen = plane_before_lens((WIDTH, HEIGHT), FOCAL_WIDTHS, case.centre, case.tilt_deg, side)
     frames = int(round(SHARE * 2 * math.pi / abs(case.omega_rad_s) * FPS)) + 1
-    command = [imageio_ffmpeg.get_ffmpeg_exe(), "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "gray",
-               "-s", f"{WIDTH}x{HEIGHT}", "-r", f"{FPS:g}", "-i", "-", "-c:v", "libx264", "-crf", "23",
-               "-pix_fmt", "yuv420p", str(path)]
     rng = np.random.default_rng(3)
-    with subprocess.Popen(command, stdin=subprocess.PIPE) as encoder:
-        assert encoder.stdin is not None
+
+    def pictures():
         for index in range(frames):
-            angle = case.omega_rad_s * index / FPS
-            turn = np.array([[math.cos(angle), -math.sin(angle), 0], [math.sin(angle), math.cos(angle), 0], [0, 0, 1]])
-            seen = plane @ turn @ to_centre
-            body = cv2.warpPerspective(texture, seen, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
-            cover = cv2.warpPerspective(disc, seen, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
-            picture = floor * (1 - cover) + body * cover + rng.normal(0.0, 2.0, cover.shape)
-            encoder.stdin.write(np.clip(picture, 0, 255).astype(np.uint8).tobytes())
-        encoder.stdin.close()
-    if encoder.returncode != 0:
-        raise SystemExit(f"FFmpeg could not write {path}")
+            turned = seen(case.omega_rad_s * index / FPS)
+            body = cv2.warpPerspective(texture, turned, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
+            cover = cv2.warpPerspective(disc, turned, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
+            yield floor * (1 - cover) + body * cover + rng.normal(0.0, 2.0, cover.shape)
+
+    write_h264_grey(path, pictures(), (WIDTH, HEIGHT), FPS)
 
 
 def main() -> int:
-    only = only_option(__doc__ or "", "cases")
-    if footage_absent(DATA):
-        return 0
-    OUT.mkdir(parents=True, exist_ok=True)
-    chosen = [(case.name, OUT / f"{case.name}.mp4", lambda path, case=case: render(case, path),
-               {"omega_rad_s": abs(case.omega_rad_s), "direction": "cw" if case.omega_rad_s > 0 else "ccw"})
-              for case in CASES if not only or only in case.name]
-    return rendered_cases(chosen, WITHIN, 12, f"{WITHIN:.0%}")
+    return rendered_main(__doc__ or "", DATA, OUT, list(CASES), render, WITHIN, 12)
+
 
 if __name__ == "__main__":
     sys.exit(main())

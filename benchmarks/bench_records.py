@@ -18,7 +18,6 @@ Skips where the shared photographs (the labels) are absent. Renders are cached i
 from __future__ import annotations
 
 import math
-import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +28,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.scoring import footage_absent, only_option, rendered_cases  # noqa: E402
+from benchmarks.scoring import plane_before_lens, rendered_main, write_h264_grey  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data"
 OUT = ROOT / "bench_out" / "records"
@@ -71,8 +70,6 @@ def render(case: Case, path: Path) -> None:
     plane tilted about the picture's x axis before the lens; the highlight, the spindle and the
     tonearm still over it, a still textured plinth around; a little sensor noise; H.264 (CRF 23)
     through imageio-ffmpeg's FFmpeg."""
-    import imageio_ffmpeg
-
     rng = np.random.default_rng(1)
     radius = case.radius_px
     side = int(2 * radius)
@@ -97,11 +94,8 @@ def render(case: Case, path: Path) -> None:
     vinyl[corner:corner + across, corner:corner + across] = np.where(inside, label, window)
     vinyl[r < 0.025 * radius] = 60  # the hole round the spindle
     disc = (r <= radius).astype(np.float32)
-    focal, tilt = FOCAL_WIDTHS * WIDTH, math.radians(case.tilt_deg)
-    lens = np.array([[focal, 0, case.centre[0] * WIDTH], [0, focal, case.centre[1] * HEIGHT], [0, 0, 1.0]])
-    plane = lens @ np.array([[1.0, 0, 0], [0, math.cos(tilt), 0], [0, math.sin(tilt), focal]])
-    to_centre = np.array([[1.0, 0, -side / 2 + 0.5], [0, 1, -side / 2 + 0.5], [0, 0, 1]])
-    still = plane @ to_centre
+    seen = plane_before_lens((WIDTH, HEIGHT), FOCAL_WIDTHS, case.centre, case.tilt_deg, side)
+    still = seen(0.0)
     plinth = 120.0 + cv2.GaussianBlur(rng.normal(0, 25, (HEIGHT, WIDTH)).astype(np.float32), (0, 0), 6)
     across_line = (xx - side / 2) * math.cos(0.7) + (yy - side / 2) * math.sin(0.7)
     highlight = (110 * np.exp(-0.5 * (across_line / (0.06 * radius)) ** 2) * ((r > 0.4 * radius) & (r < radius))
@@ -109,39 +103,26 @@ def render(case: Case, path: Path) -> None:
     highlight = cv2.warpPerspective(highlight, still, (WIDTH, HEIGHT))
     spindle = cv2.warpPerspective((r < 0.02 * radius).astype(np.float32), still, (WIDTH, HEIGHT))
     arm = np.zeros((HEIGHT, WIDTH), np.float32)
+    tilt = math.radians(case.tilt_deg)
     rest = (int(case.centre[0] * WIDTH + 0.9 * radius), int(case.centre[1] * HEIGHT - 0.5 * radius * math.cos(tilt)))
     cv2.line(arm, (min(WIDTH - 1, rest[0] + 120), max(0, rest[1] - 60)),
              (rest[0] - int(0.35 * radius), rest[1] + int(0.25 * radius * math.cos(tilt))), 1.0, 9)
     frames = int(round(case.share * 2 * math.pi / abs(case.omega_rad_s) * FPS)) + 1
-    command = [imageio_ffmpeg.get_ffmpeg_exe(), "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "gray",
-               "-s", f"{WIDTH}x{HEIGHT}", "-r", f"{FPS:g}", "-i", "-", "-c:v", "libx264", "-crf", "23",
-               "-pix_fmt", "yuv420p", "-f", "mp4", str(path)]
-    with subprocess.Popen(command, stdin=subprocess.PIPE) as encoder:
-        assert encoder.stdin is not None
+
+    def pictures():
         for index in range(frames):
-            angle = case.omega_rad_s * index / FPS
-            turn = np.array([[math.cos(angle), -math.sin(angle), 0], [math.sin(angle), math.cos(angle), 0], [0, 0, 1]])
-            seen = plane @ turn @ to_centre
-            body = cv2.warpPerspective(vinyl, seen, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
-            cover = cv2.warpPerspective(disc, seen, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
+            turned = seen(case.omega_rad_s * index / FPS)
+            body = cv2.warpPerspective(vinyl, turned, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
+            cover = cv2.warpPerspective(disc, turned, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
             picture = plinth * (1 - cover) + body * cover + highlight
             picture = picture * (1 - spindle) + 50 * spindle
-            picture = picture * (1 - arm) + 170 * arm + rng.normal(0.0, 2.0, cover.shape)
-            encoder.stdin.write(np.clip(picture, 0, 255).astype(np.uint8).tobytes())
-        encoder.stdin.close()
-    if encoder.returncode != 0:
-        raise SystemExit(f"FFmpeg could not write {path}")
+            yield picture * (1 - arm) + 170 * arm + rng.normal(0.0, 2.0, cover.shape)
+
+    write_h264_grey(path, pictures(), (WIDTH, HEIGHT), FPS)
 
 
 def main() -> int:
-    only = only_option(__doc__ or "", "cases")
-    if footage_absent(DATA):
-        return 0
-    OUT.mkdir(parents=True, exist_ok=True)
-    chosen = [(case.name, OUT / f"{case.name}.mp4", lambda path, case=case: render(case, path),
-               {"omega_rad_s": abs(case.omega_rad_s), "direction": "cw" if case.omega_rad_s > 0 else "ccw"})
-              for case in CASES if not only or only in case.name]
-    return rendered_cases(chosen, WITHIN, 16, f"{WITHIN:.0%}")
+    return rendered_main(__doc__ or "", DATA, OUT, list(CASES), render, WITHIN, 16)
 
 
 if __name__ == "__main__":

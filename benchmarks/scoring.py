@@ -172,3 +172,59 @@ def part_truth(video: Path, omega_rad_s: float, fps: float, start_s: float | Non
         return omega_rad_s
     local = sticker_omega(track, fps, start_s or 0.0, end_s if end_s is not None else math.inf)
     return local if math.isfinite(local) else omega_rad_s
+
+
+def plane_before_lens(size_px: tuple[int, int], focal_widths: float, centre: tuple[float, float], tilt_deg: float,
+                      side_px: int) -> tuple:
+    """A flat texture ``side_px`` square laid on a plane tilted ``tilt_deg`` about the picture's x
+    axis before a pinhole lens (``focal_widths`` picture widths), its middle at ``centre`` (picture
+    widths and heights): the homography of the texture's pixels at the plane turned by an angle
+    (radians) about its middle, as a function of that angle."""
+    import numpy as np
+
+    width, height = size_px
+    focal, tilt = focal_widths * width, math.radians(tilt_deg)
+    lens = np.array([[focal, 0, centre[0] * width], [0, focal, centre[1] * height], [0, 0, 1.0]])
+    plane = lens @ np.array([[1.0, 0, 0], [0, math.cos(tilt), 0], [0, math.sin(tilt), focal]])
+    to_centre = np.array([[1.0, 0, -side_px / 2 + 0.5], [0, 1, -side_px / 2 + 0.5], [0, 0, 1]])
+
+    def seen(angle_rad: float):
+        turn = np.array([[math.cos(angle_rad), -math.sin(angle_rad), 0], [math.sin(angle_rad), math.cos(angle_rad), 0],
+                         [0, 0, 1]])
+        return plane @ turn @ to_centre
+
+    return seen
+
+
+def write_h264_grey(path: Path, pictures, size_px: tuple[int, int], fps: float) -> None:
+    """Grey pictures (float, clipped to 0-255) written as H.264 (CRF 23), as a phone writes it,
+    through imageio-ffmpeg's FFmpeg."""
+    import subprocess
+
+    import imageio_ffmpeg
+    import numpy as np
+
+    command = [imageio_ffmpeg.get_ffmpeg_exe(), "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "gray",
+               "-s", f"{size_px[0]}x{size_px[1]}", "-r", f"{fps:g}", "-i", "-", "-c:v", "libx264", "-crf", "23",
+               "-pix_fmt", "yuv420p", "-f", "mp4", str(path)]
+    with subprocess.Popen(command, stdin=subprocess.PIPE) as encoder:
+        assert encoder.stdin is not None
+        for picture in pictures:
+            encoder.stdin.write(np.clip(picture, 0, 255).astype(np.uint8).tobytes())
+        encoder.stdin.close()
+    if encoder.returncode != 0:
+        raise SystemExit(f"FFmpeg could not write {path}")
+
+
+def rendered_main(doc: str, data: Path, out: Path, cases: list, render: Callable, within: float, width: int) -> int:
+    """A rendered benchmark's run (:func:`rendered_cases`): ``--only``, skipped without the shared
+    photographs, each case (``name``, ``omega_rad_s``: positive clockwise as the picture shows it)
+    rendered once into ``out``."""
+    only = only_option(doc, "cases")
+    if footage_absent(data):
+        return 0
+    out.mkdir(parents=True, exist_ok=True)
+    chosen = [(case.name, out / f"{case.name}.mp4", lambda path, case=case: render(case, path),
+               {"omega_rad_s": abs(case.omega_rad_s), "direction": "cw" if case.omega_rad_s > 0 else "ccw"})
+              for case in cases if not only or only in case.name]
+    return rendered_cases(chosen, within, width, f"{within:.0%}")
