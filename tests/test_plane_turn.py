@@ -210,18 +210,26 @@ def _face_on_frames(deg_per_frame: float, count: int, size: int = 240) -> list:
     return frames
 
 
-def test_the_picture_bears_out_the_tracks_plane_only_at_its_own_rate() -> None:
-    from dataclasses import replace
-
-    from rotrate_cli.scene.disc import DiscView, PlaneMap
-    from rotrate_cli.scene.picture_angle import AngleFrames, PictureAngle
-    from rotrate_cli.stages.angle import _weighed
+def _face_on_kept():
+    """A face-on disc turning 4 degrees a frame, 30 frames, as the picture's angle keeps them; its
+    rate (rad/s); and the plane's map face on about its middle."""
+    from rotrate_cli.scene.disc import PlaneMap
+    from rotrate_cli.scene.picture_angle import AngleFrames
 
     kept = AngleFrames()
     for _ in kept.tap(iter(_face_on_frames(4.0, 30))):
         pass
-    truth = math.radians(4.0 * FPS)
-    face_on = PlaneMap((0.0, 0.0), (120.0, 120.0), ((1.0, 0.0), (0.0, 1.0)), 105.0)
+    return kept, math.radians(4.0 * FPS), PlaneMap((0.0, 0.0), (120.0, 120.0), ((1.0, 0.0), (0.0, 1.0)), 105.0)
+
+
+def test_the_picture_bears_out_the_tracks_plane_only_at_its_own_rate() -> None:
+    from dataclasses import replace
+
+    from rotrate_cli.scene.disc import DiscView
+    from rotrate_cli.scene.picture_angle import PictureAngle
+    from rotrate_cli.stages.angle import _weighed
+
+    kept, truth, face_on = _face_on_kept()
     plane = PictureAngle(truth, 0.99 * truth, 1.01 * truth, 1, np.zeros(2), np.zeros(2), 116.0, 1.0,
                          DiscView((120.0, 120.0), 0.0, 0.0, math.inf), plane=True, plane_map=face_on)
     # tracks that slide a little (-0.6% within +-0.5%, missing): borne out, and the changes, which
@@ -253,15 +261,10 @@ def test_the_picture_bears_out_the_tracks_plane_only_at_its_own_rate() -> None:
 def test_a_plane_read_from_tracks_placed_again_stands_on_its_own_and_within_the_changes_drift() -> None:
     from dataclasses import replace
 
-    from rotrate_cli.scene.disc import PlaneMap
-    from rotrate_cli.scene.picture_angle import AngleFrames, PictureAngle
+    from rotrate_cli.scene.picture_angle import PictureAngle
     from rotrate_cli.stages.angle import _weighed
 
-    kept = AngleFrames()
-    for _ in kept.tap(iter(_face_on_frames(4.0, 30))):
-        pass
-    truth = math.radians(4.0 * FPS)
-    face_on = PlaneMap((0.0, 0.0), (120.0, 120.0), ((1.0, 0.0), (0.0, 1.0)), 105.0)
+    kept, truth, face_on = _face_on_kept()
     placed = PictureAngle(1.002 * truth, 1.0 * truth, 1.004 * truth, 1, np.zeros(2), np.zeros(2), 116.0, 1.0,
                           DiscView((120.0, 120.0), 0.0, 0.0, math.inf), plane=True, plane_map=face_on,
                           plane_placed=True)
@@ -365,15 +368,10 @@ def test_changes_that_see_the_body_turn_farther_than_the_planes_tracks_give_the_
     stood, good and missing."""
     from dataclasses import replace
 
-    from rotrate_cli.scene.disc import PlaneMap
-    from rotrate_cli.scene.picture_angle import AngleFrames, PictureAngle
+    from rotrate_cli.scene.picture_angle import PictureAngle
     from rotrate_cli.stages.angle import _weighed
 
-    kept = AngleFrames()
-    for _ in kept.tap(iter(_face_on_frames(4.0, 30))):
-        pass
-    truth = math.radians(4.0 * FPS)
-    face_on = PlaneMap((0.0, 0.0), (120.0, 120.0), ((1.0, 0.0), (0.0, 1.0)), 105.0)
+    kept, truth, face_on = _face_on_kept()
     short = PictureAngle(1.008 * truth, 1.003 * truth, 1.013 * truth, 1, np.zeros(2), np.zeros(2), 20.0, 1.0,
                          DiscView((120.0, 120.0), 0.0, 0.0, math.inf), plane=True, plane_map=face_on,
                          plane_placed=True)
