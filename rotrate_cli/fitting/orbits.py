@@ -57,42 +57,45 @@ class TurningGroup:
 
 def turning_groups(tracks: pd.DataFrame, size_px: tuple[int, int]) -> tuple[TurningGroup, ...]:
     """The groups of ``tracks`` (``frame, time_s, track, x_px, y_px``, sorted by track then frame)
-    that go round one centre at one rate, the largest first (see the module's notes)."""
+    that go round one centre at one rate, the largest first (see the module's notes). Only tracks
+    long enough, far enough and opened into ellipses are fitted (at most :data:`MOST_TRACKS`, evenly):
+    a long clip's table is not copied."""
     longest = float(max(size_px))
     track = tracks["track"].to_numpy()
-    if len(track) == 0:
+    if len(track) < MIN_SAMPLES or bool(np.any(np.diff(track) < 0)):
         return ()
-    ids, first, counts = np.unique(track, return_index=True, return_counts=True)
-    long_enough = np.repeat(counts >= MIN_SAMPLES, counts) if bool(np.all(np.diff(track) >= 0)) \
-        else np.isin(track, ids[counts >= MIN_SAMPLES])
-    if not long_enough.any():
+    starts = np.r_[0, np.flatnonzero(np.diff(track)) + 1]
+    counts = np.diff(np.r_[starts, len(track)])
+    x, y = tracks["x_px"].to_numpy(dtype=float), tracks["y_px"].to_numpy(dtype=float)
+    range_x = np.maximum.reduceat(x, starts) - np.minimum.reduceat(x, starts)
+    range_y = np.maximum.reduceat(y, starts) - np.minimum.reduceat(y, starts)
+    longer, shorter = np.maximum(range_x, range_y), np.minimum(range_x, range_y)
+    chosen = (counts >= MIN_SAMPLES) & (shorter >= MIN_OPENING * longer) & (longer >= MIN_RADIUS * longest)
+    if chosen.sum() < MIN_GROUP:
         return ()
-    rows = tracks.loc[long_enough, ["track", "frame", "time_s", "x_px", "y_px"]]
-    x, y = rows["x_px"].to_numpy(dtype=float), rows["y_px"].to_numpy(dtype=float)
-    along_x = track_motion(rows, x).set_index("track")
-    along_y = track_motion(rows, y).set_index("track")
+    if chosen.sum() > MOST_TRACKS:  # the grouping is quadratic: an even subset
+        picked = np.flatnonzero(chosen)
+        chosen[:] = False
+        chosen[picked[np.linspace(0, len(picked) - 1, MOST_TRACKS).astype(int)]] = True
+    rows = np.repeat(chosen, counts)
+    table = pd.DataFrame({"track": track[rows], "frame": tracks["frame"].to_numpy()[rows],
+                          "time_s": tracks["time_s"].to_numpy()[rows]})
+    along_x = track_motion(table, x[rows]).set_index("track")
+    along_y = track_motion(table, y[rows]).set_index("track")
     both = along_x.merge(along_y, left_index=True, right_index=True, suffixes=("_x", "_y"))
     if both.empty:
         return ()
-    kept_ids = rows["track"].to_numpy()
-    spans = pd.DataFrame({"track": kept_ids, "x": x, "y": y}).groupby("track").agg(["min", "max", "first"])
-    spans = spans.loc[both.index]
-    range_x = (spans[("x", "max")] - spans[("x", "min")]).to_numpy()
-    range_y = (spans[("y", "max")] - spans[("y", "min")]).to_numpy()
+    place = np.searchsorted(track[starts], both.index.to_numpy())
     rate_x, rate_y = both["omega_rad_s_x"].to_numpy(), both["omega_rad_s_y"].to_numpy()
-    opened = np.minimum(range_x, range_y) >= MIN_OPENING * np.maximum(range_x, range_y)
     agreeing = np.abs(np.log(rate_x / rate_y)) <= RATE_TOLERANCE
-    chosen = opened & agreeing & (np.maximum(range_x, range_y) >= MIN_RADIUS * longest)
-    if chosen.sum() < MIN_GROUP:
+    if agreeing.sum() < MIN_GROUP:
         return ()
-    rate = np.where(range_x >= range_y, rate_x, rate_y)[chosen]
-    centre = np.column_stack([both["axis_px_x"].to_numpy(), both["axis_px_y"].to_numpy()])[chosen]
-    start = np.column_stack([spans[("x", "first")].to_numpy(), spans[("y", "first")].to_numpy()])[chosen]
+    place = place[agreeing]
+    rate = np.where(range_x[place] >= range_y[place], rate_x[agreeing], rate_y[agreeing])
+    centre = np.column_stack([both["axis_px_x"].to_numpy()[agreeing], both["axis_px_y"].to_numpy()[agreeing]])
+    start = np.column_stack([x[starts[place]], y[starts[place]]])
     # each orbit's radius: half its longer range (the ellipse's long semi-axis, or the chord seen)
-    radius = (0.5 * np.maximum(range_x, range_y))[chosen]
-    if len(rate) > MOST_TRACKS:  # the comparison is quadratic: an even subset
-        keep = np.linspace(0, len(rate) - 1, MOST_TRACKS).astype(int)
-        rate, centre, start, radius = rate[keep], centre[keep], start[keep], radius[keep]
+    radius = 0.5 * longer[place]
     return _grouped(rate, centre, start, radius, longest)
 
 
