@@ -266,6 +266,8 @@ def test_under_a_turn_of_the_record_the_pictures_turning_gives_the_rate() -> Non
     assert not [w for w in analysis.warnings if "the tracks turn about an axis through" in w]
 
 
+@pytest.mark.slow  # writes the record's copy and analyses it (about 12 s): make test-slow keeps make test under
+# 4 minutes; make bench-variants-parts measures the same copy's parts
 def test_the_record_played_backwards_at_half_size_finds_its_spindle_under_a_turn(tmp_path: Path) -> None:
     """The record at half size played backwards (as ``make bench-variants`` writes it), 0.6 of a
     turn from 2 s, the axis found: the coarse search's two best centres refined to views that told
