@@ -5,6 +5,7 @@ than the one measured turns (:func:`another_body_seen`)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -125,9 +126,10 @@ def another_body_seen(groups: tuple[TurningGroup, ...], omega_rad_s: float, fixa
     if other is None:
         return None
     x, y = other.centre_px
+    measured = (f"the rate reported is the body's about ({fixation_px[0]:.0f}, {fixation_px[1]:.0f}) px"
+                if all(math.isfinite(v) for v in fixation_px) else "the rate reported is another's")
     note = (f"another body turns in the picture: about {other.omega_rad_s:.3g} rad/s about ({x:.0f}, {y:.0f}) px, "
-            f"from {other.tracks} tracks going round it; the rate reported is the body's about "
-            f"({fixation_px[0]:.0f}, {fixation_px[1]:.0f}) px; `segment` measures each")
+            f"from {other.tracks} tracks going round it; {measured}; `segment` measures each")
     because = "" if fixation_given else ("two bodies turn at different rates, and which one is meant is not "
                                          "known: give the axis of the one meant")
     return AnotherBody(other, note, because)
