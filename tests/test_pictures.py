@@ -324,3 +324,21 @@ def test_an_overlay_with_no_point_followed_is_written(tmp_path: Path) -> None:
     video = tmp_path / "overlay.mp4"
     _write_overlay(str(BOX), None, 0.0, 1.5, untracked, video, False)
     assert video.exists() and cv2.VideoCapture(str(video)).get(cv2.CAP_PROP_FRAME_COUNT) > 30
+
+
+def test_an_overlay_of_a_weak_headline_says_so_beside_the_rate(tmp_path: Path, monkeypatch) -> None:
+    """The overlay wrote the headline's rate and interval with no word of its quality: a weak
+    result looked as sure as a good one."""
+    import rotrate_cli.output.overlay as overlay
+
+    written: list[str] = []
+    drawn = overlay._label
+    monkeypatch.setattr(overlay, "_label", lambda image, text, *rest: (written.append(text), drawn(image, text, *rest)))
+    tracks = pd.DataFrame({"frame": pd.Series(dtype=int), "time_s": pd.Series(dtype=float),
+                           "track": pd.Series(dtype=int), "x_px": pd.Series(dtype=float),
+                           "y_px": pd.Series(dtype=float)})
+    for tag in ("weak", ""):
+        written.clear()
+        overlay.write_overlay(FrameSource(str(BOX)), tmp_path / f"o{tag}.mp4", tracks, set(), (320.0, 180.0), 0.0,
+                              lambda _: (0.5, 0.49, 0.51), end_s=0.2, tag=tag)
+        assert written and all(("  weak  " in text) == (tag == "weak") for text in written if text.startswith("omega"))

@@ -358,8 +358,10 @@ def _write_overlay(source: str, fps: float | None, start: float, end: float | No
                                "y_px": pd.Series(dtype=float)})
     named = {int(track): str(reason) for track, reason in zip(features["track"], features["reason"], strict=True)
              if reason in ("reflection", "slides", "other_motion")}
+    # the headline's quality where the headline is what is written (the tracks' running rate has its own)
+    tag = "weak" if headline and analysis.quality == "weak" else ""
     write_overlay(FrameSource(source, fps=fps, times_s=times_s), path, tracks, inliers, analysis.fixation_px,
-                  analysis.axis_angle_deg, at, start, end, force, named, progress, analysis.camera_path)
+                  analysis.axis_angle_deg, at, start, end, force, named, progress, analysis.camera_path, tag)
 
 
 def _detail_paths(sources: list[str], folder: Path, suffix: str) -> list[Path]:

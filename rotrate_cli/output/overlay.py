@@ -128,6 +128,7 @@ def write_overlay(
     named: dict[int, str] | None = None,
     progress: Callable[[int, int | None], None] | None = None,
     camera: CameraPath | None = None,
+    tag: str = "",
 ) -> int:
     """Write the overlay video: each frame of ``source`` between ``start_s`` and ``end_s`` with
     the axis, each track's last :data:`TRAIL_S` of path (inliers green, rejected red, those
@@ -137,8 +138,8 @@ def write_overlay(
     ``tracks`` has ``track, frame, x_px, y_px`` (features numbered as in the report).
     ``progress`` is called after each frame written with the count so far and the source's frame
     count (None where unknown). ``camera``: a moving camera's path, where the axis (``point_px``,
-    ``angle_deg``, where the camera stood at the first frame) is drawn where it saw it. Returns the
-    number of frames written.
+    ``angle_deg``, where the camera stood at the first frame) is drawn where it saw it. ``tag``: a
+    word written after the rate (``weak``). Returns the number of frames written.
     """
     info = source.info
     fourcc = cv2.VideoWriter_fourcc(*("mp4v" if path.suffix.lower() in {".mp4", ".mov", ".mkv", ""} else "MJPG"))
@@ -148,7 +149,7 @@ def write_overlay(
             raise OutputError(f"could not open a video writer for {path}; use a .mp4 or .avi name")
         try:
             return _draw_frames(source, writer, tracks, inliers, point_px, angle_deg, running, start_s, end_s,
-                                named or {}, progress, camera)
+                                named or {}, progress, camera, tag)
         finally:
             writer.release()
 
@@ -157,7 +158,7 @@ def _draw_frames(
     source: FrameSource, writer: cv2.VideoWriter, tracks: pd.DataFrame, inliers: set[int],
     point_px: tuple[float, float], angle_deg: float, running: Callable[[float], tuple[float, float, float]],
     start_s: float, end_s: float | None, named: dict[int, str],
-    progress: Callable[[int, int | None], None] | None = None, camera: CameraPath | None = None,
+    progress: Callable[[int, int | None], None] | None = None, camera: CameraPath | None = None, tag: str = "",
 ) -> int:
     """Draw and write the overlay's frames (see :func:`write_overlay`); returns how many."""
     info = source.info
@@ -188,7 +189,7 @@ def _draw_frames(
                 cv2.polylines(image, [points], False, colour, 1, cv2.LINE_AA)
             cv2.circle(image, (int(points[-1][0]), int(points[-1][1])), 2, colour, -1, cv2.LINE_AA)
         omega, low, high = running(frame.time_s)
-        text = (f"omega {omega:.4f} rad/s [{low:.4f}, {high:.4f}]  t {frame.time_s:.2f} s"
+        text = (f"omega {omega:.4f} rad/s [{low:.4f}, {high:.4f}]{'  ' + tag if tag else ''}  t {frame.time_s:.2f} s"
                 if math.isfinite(omega) else f"omega: not yet  t {frame.time_s:.2f} s")
         # on a dark band: the codec then keeps the changing text sharp
         cv2.rectangle(image, (0, 0), (image.shape[1] - 1, int(42 * scale)), (0, 0, 0), -1)
