@@ -186,6 +186,7 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "omega": _number(analysis.other_body.omega_rad_s, 4),
             "centre_px": [_number(v, 1) for v in analysis.other_body.centre_px],
             "tracks": analysis.other_body.tracks,
+            "along": analysis.other_body.along,
         },
         "direction": analysis.direction,
         "direction_seen": _direction_seen(analysis),

@@ -5,9 +5,12 @@ A point of a body turning at ``omega`` (seen without much perspective) moves on 
 image x and y are each a sinusoid of that rate about the ellipse's centre, the image of the axis.
 The exact recurrence of :func:`rotrate_cli.fitting.segment.track_motion` gives each coordinate's
 rate and centre on its own; a track whose two rates agree has an orbit: a rate, a centre and a
-radius. Tracks that share the rate and the centre are one body's (:func:`turning_groups`). Seen
-from the side (one coordinate hardly moves) a track tells no centre across, and is not counted:
-only bodies whose paths open into ellipses are found here (discs, wheels, fans side by side).
+radius. Tracks that share the rate and the centre are one body's (:func:`turning_groups`).
+
+Seen from the side, a point's path is a line: along it, its position is still a sinusoid of the
+rate about the axis's place, and across it tells nothing. Such tracks are grouped apart, by their
+rate and the axis's place along their line alone (the paper's own scene: boxes, cylinders, a car on
+its turntable, side by side). A group must still go round its axis: points on both sides of it.
 """
 
 from __future__ import annotations
@@ -36,6 +39,12 @@ MOST_TRACKS = 2000
 #: (their mean unit vector shorter than this).
 MIN_RADIUS = 0.03
 MOST_LOPSIDED = 0.7
+#: Along a side view's lines a track's recurrence is read from an arc of a sinusoid only, and one
+#: body's tracks scatter in rate (on rendered boxes seen from the side, 0.45-0.74 rad/s for 0.5-0.6):
+#: they fall into several groups, the smaller ones (12-23 tracks, a quarter of the largest or less)
+#: centred 45-55 px off the axis. A side view's group stands for a body only where it holds at least
+#: this share of the largest one's tracks (two bodies side by side: 313 and 25).
+LINE_SHARE = 0.3
 
 
 @dataclass(frozen=True)
@@ -53,6 +62,9 @@ class TurningGroup:
     centre_px: tuple[float, float]
     radius_px: float
     tracks: int
+    #: ``"both"`` for orbits opened into ellipses; ``"x"`` or ``"y"`` for a side view's lines along
+    #: that coordinate, whose centre is known along it only (the other coordinate: their middle)
+    along: str = "both"
 
 
 def turning_groups(tracks: pd.DataFrame, size_px: tuple[int, int]) -> tuple[TurningGroup, ...]:
@@ -71,42 +83,90 @@ def turning_groups(tracks: pd.DataFrame, size_px: tuple[int, int]) -> tuple[Turn
     range_y = np.maximum.reduceat(y, starts) - np.minimum.reduceat(y, starts)
     longer, shorter = np.maximum(range_x, range_y), np.minimum(range_x, range_y)
     chosen = (counts >= MIN_SAMPLES) & (shorter >= MIN_OPENING * longer) & (longer >= MIN_RADIUS * longest)
-    if chosen.sum() < MIN_GROUP:
-        return ()
-    if chosen.sum() > MOST_TRACKS:  # the grouping is quadratic: an even subset
-        picked = np.flatnonzero(chosen)
-        chosen[:] = False
-        chosen[picked[np.linspace(0, len(picked) - 1, MOST_TRACKS).astype(int)]] = True
+    lines = (counts >= MIN_SAMPLES) & (shorter < MIN_OPENING * longer) & (longer >= MIN_RADIUS * longest)
+    found = _ellipses(tracks, chosen, starts, counts, x, y, range_x, range_y, longest)
+    side: list[TurningGroup] = []
+    for along, values, ranges, across in (("x", x, range_x, y), ("y", y, range_y, x)):
+        picked = _evenly_at_most(lines & (ranges >= range_x) & (ranges >= range_y), MOST_TRACKS)
+        side += _lines(tracks, picked, starts, counts, values, across, 0.5 * ranges, along, longest)
+    most = max((group.tracks for group in side), default=0)
+    found += [group for group in side if group.tracks >= LINE_SHARE * most]
+    return tuple(sorted(found, key=lambda group: -group.tracks))
+
+
+def _evenly_at_most(chosen: np.ndarray, most: int) -> np.ndarray:
+    """``chosen``, or an even subset of at most ``most`` of its tracks (the grouping is quadratic)."""
+    if chosen.sum() <= most:
+        return chosen
+    picked = np.flatnonzero(chosen)
+    subset = np.zeros_like(chosen)
+    subset[picked[np.linspace(0, len(picked) - 1, most).astype(int)]] = True
+    return subset
+
+
+def _motion(tracks: pd.DataFrame, chosen: np.ndarray, counts: np.ndarray, values: np.ndarray) -> pd.DataFrame:
+    """The recurrence's rate and centre of each chosen track along ``values``, indexed by track."""
     rows = np.repeat(chosen, counts)
-    table = pd.DataFrame({"track": track[rows], "frame": tracks["frame"].to_numpy()[rows],
+    table = pd.DataFrame({"track": tracks["track"].to_numpy()[rows], "frame": tracks["frame"].to_numpy()[rows],
                           "time_s": tracks["time_s"].to_numpy()[rows]})
-    along_x = track_motion(table, x[rows]).set_index("track")
-    along_y = track_motion(table, y[rows]).set_index("track")
+    return track_motion(table, values[rows]).set_index("track")
+
+
+def _ellipses(tracks: pd.DataFrame, chosen: np.ndarray, starts: np.ndarray, counts: np.ndarray, x: np.ndarray,
+              y: np.ndarray, range_x: np.ndarray, range_y: np.ndarray, longest: float) -> list[TurningGroup]:
+    """The groups of tracks whose paths open into ellipses (both coordinates' rates agree)."""
+    chosen = _evenly_at_most(chosen, MOST_TRACKS)
+    if chosen.sum() < MIN_GROUP:
+        return []
+    along_x, along_y = _motion(tracks, chosen, counts, x), _motion(tracks, chosen, counts, y)
     both = along_x.merge(along_y, left_index=True, right_index=True, suffixes=("_x", "_y"))
     if both.empty:
-        return ()
+        return []
+    track = tracks["track"].to_numpy()
     place = np.searchsorted(track[starts], both.index.to_numpy())
     rate_x, rate_y = both["omega_rad_s_x"].to_numpy(), both["omega_rad_s_y"].to_numpy()
     agreeing = np.abs(np.log(rate_x / rate_y)) <= RATE_TOLERANCE
     if agreeing.sum() < MIN_GROUP:
-        return ()
+        return []
     place = place[agreeing]
     rate = np.where(range_x[place] >= range_y[place], rate_x[agreeing], rate_y[agreeing])
     centre = np.column_stack([both["axis_px_x"].to_numpy()[agreeing], both["axis_px_y"].to_numpy()[agreeing]])
     start = np.column_stack([x[starts[place]], y[starts[place]]])
     # each orbit's radius: half its longer range (the ellipse's long semi-axis, or the chord seen)
-    radius = 0.5 * longer[place]
-    return _grouped(rate, centre, start, radius, longest)
+    radius = 0.5 * np.maximum(range_x[place], range_y[place])
+    return [group for group, _ in _grouped(rate, centre, start, radius, longest)]
+
+
+def _lines(tracks: pd.DataFrame, chosen: np.ndarray, starts: np.ndarray, counts: np.ndarray, values: np.ndarray,
+           across: np.ndarray, radius: np.ndarray, along: str, longest: float) -> list[TurningGroup]:
+    """The groups of a side view's tracks (lines along ``along``): by rate and the centre along it."""
+    if chosen.sum() < MIN_GROUP:
+        return []
+    motion = _motion(tracks, chosen, counts, values)
+    rate = motion["omega_rad_s"].to_numpy()
+    fitted = np.isfinite(rate) & (rate > 0) & np.isfinite(motion["axis_px"].to_numpy())
+    if fitted.sum() < MIN_GROUP:
+        return []
+    place = np.searchsorted(tracks["track"].to_numpy()[starts], motion.index.to_numpy())[fitted]
+    middle_across = (np.maximum.reduceat(across, starts) + np.minimum.reduceat(across, starts))[place] / 2.0
+    centre = np.column_stack([motion["axis_px"].to_numpy()[fitted], np.zeros(len(place))])
+    start = np.column_stack([values[starts[place]], np.zeros(len(place))])
+    # across their lines, the group is placed at its members' middle (for the report)
+    return [TurningGroup(group.omega_rad_s, ((group.centre_px[0], float(np.median(middle_across[members])))
+                                             if along == "x" else (float(np.median(middle_across[members])),
+                                                                   group.centre_px[0])),
+                         group.radius_px, group.tracks, along)
+            for group, members in _grouped(rate[fitted], centre, start, radius[place], longest)]
 
 
 def _grouped(rate: np.ndarray, centre: np.ndarray, start: np.ndarray, radius: np.ndarray,
-             longest: float) -> tuple[TurningGroup, ...]:
+             longest: float) -> list[tuple[TurningGroup, np.ndarray]]:
     """Mode seeking in (log rate, centre): the track with the most neighbours seeds a group of
-    them, and the search repeats on the rest."""
+    them, and the search repeats on the rest. Each group with its members' indices."""
     scaled_rate = np.log(rate) / RATE_TOLERANCE
     scaled_centre = centre / (CENTRE_TOLERANCE * longest)
     left = np.ones(len(rate), dtype=bool)
-    found: list[TurningGroup] = []
+    found: list[tuple[TurningGroup, np.ndarray]] = []
     while len(found) < MOST_GROUPS and left.sum() >= MIN_GROUP:
         pool = np.flatnonzero(left)
         near = ((np.abs(scaled_rate[pool, None] - scaled_rate[None, pool]) <= 1.0)
@@ -126,9 +186,9 @@ def _grouped(rate: np.ndarray, centre: np.ndarray, start: np.ndarray, radius: np
         spread = float(np.percentile(radius[members], 90))
         if spread < MIN_RADIUS * longest or lopsided > MOST_LOPSIDED:
             continue  # a patch shaking in place, or tracks on one side of a centre they do not go round
-        found.append(TurningGroup(float(np.median(rate[members])), (float(middle[0]), float(middle[1])), spread,
-                                  len(members)))
-    return tuple(sorted(found, key=lambda group: -group.tracks))
+        found.append((TurningGroup(float(np.median(rate[members])), (float(middle[0]), float(middle[1])), spread,
+                                   len(members)), members))
+    return found
 
 
 #: Two rates this far apart (in log: twice the per-track tolerance) are told apart.
@@ -154,7 +214,12 @@ def another_body(groups: tuple[TurningGroup, ...], omega_rad_s: float,
         axis = np.asarray(alike[0].centre_px)
     for group in groups:
         apart = abs(math.log(group.omega_rad_s / omega_rad_s)) > RATES_APART
-        outside = math.dist(axis, group.centre_px) > OUTSIDE * group.radius_px
+        if group.along == "both":
+            away = math.dist(axis, group.centre_px)
+        else:  # a side view's lines tell the axis's place along them alone
+            coordinate = 0 if group.along == "x" else 1
+            away = abs(float(axis[coordinate]) - group.centre_px[coordinate])
+        outside = away > OUTSIDE * group.radius_px
         if apart and outside:
             return group
     return None
