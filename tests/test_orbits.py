@@ -114,7 +114,8 @@ def test_bodies_seen_from_the_side_are_grouped_along_their_lines_and_told_apart(
 def test_the_two_bodies_sample_seen_from_the_side_names_the_other(tmp_path) -> None:
     """sample_videos/two_bodies.mp4: a box (0.5 rad/s, axis at x 160) and a cylinder (-1.2 rad/s,
     axis at x 480) side by side, seen from the side. Measured with the axis found, the result
-    names the other body and is weak; a single box seen from the side names none."""
+    names the other body and is weak; about the cylinder's axis, given, it names the box; a single
+    box seen from the side names none."""
     from pathlib import Path
 
     from rotrate_cli.analysis import analyze
@@ -130,6 +131,10 @@ def test_the_two_bodies_sample_seen_from_the_side_names_the_other(tmp_path) -> N
     from rotrate_cli.cli.report import to_dict
 
     assert to_dict(two)["other_body"]["along"] == "x"
+    # measured about the cylinder's axis (given), the box is the other body: said, not weak for it
+    cylinder = analyze(samples / "two_bodies.mp4", AnalysisConfig(fixation_px=(479.0, 180.0)))
+    assert cylinder.other_body is not None and abs(cylinder.other_body.centre_px[0] - 160) < 20
+    assert cylinder.other_body.omega_rad_s == pytest.approx(0.5, rel=0.05)
     one = analyze(samples / "box_ortho.mp4", AnalysisConfig(fixation_px=None))
     assert one.other_body is None
 
