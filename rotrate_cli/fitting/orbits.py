@@ -43,7 +43,7 @@ MOST_LOPSIDED = 0.7
 #: body's tracks scatter in rate (on rendered boxes seen from the side, 0.45-0.74 rad/s for 0.5-0.6):
 #: they fall into several groups, the smaller ones (12-23 tracks, a quarter of the largest or less)
 #: centred 45-55 px off the axis. A side view's group stands for a body only where it holds at least
-#: this share of the largest one's tracks (two bodies side by side: 313 and 25).
+#: this share of the largest one's tracks (the sample of two bodies side by side: 226 and 82 of 500).
 LINE_SHARE = 0.3
 #: The most side-view tracks compared (an even subset beyond): a side view's tracks are nearly all
 #: lines, and the grouping is quadratic (1,600 of them took 40 ms of a 1-s analysis; 500, 7 ms).
@@ -73,8 +73,8 @@ class TurningGroup:
 def turning_groups(tracks: pd.DataFrame, size_px: tuple[int, int]) -> tuple[TurningGroup, ...]:
     """The groups of ``tracks`` (``frame, time_s, track, x_px, y_px``, sorted by track then frame)
     that go round one centre at one rate, the largest first (see the module's notes). Only tracks
-    long enough, far enough and opened into ellipses are fitted (at most :data:`MOST_TRACKS`, evenly):
-    a long clip's table is not copied."""
+    long enough and far enough are fitted: those opened into ellipses (at most :data:`MOST_TRACKS`,
+    evenly), and a side view's lines (at most :data:`MOST_LINES`); a long clip's table is not copied."""
     longest = float(max(size_px))
     track = tracks["track"].to_numpy()
     if len(track) < MIN_SAMPLES or bool(np.any(np.diff(track) < 0)):
