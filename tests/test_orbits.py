@@ -120,6 +120,7 @@ def test_the_two_bodies_sample_seen_from_the_side_names_the_other(tmp_path) -> N
 
     from rotrate_cli.analysis import analyze
     from rotrate_cli.config import AnalysisConfig
+    from rotrate_cli.tracking.klt import Roi, TrackerConfig
 
     samples = Path(__file__).resolve().parents[1] / "sample_videos"
     two = analyze(samples / "two_bodies.mp4", AnalysisConfig(fixation_px=None))
@@ -135,6 +136,11 @@ def test_the_two_bodies_sample_seen_from_the_side_names_the_other(tmp_path) -> N
     cylinder = analyze(samples / "two_bodies.mp4", AnalysisConfig(fixation_px=(479.0, 180.0)))
     assert cylinder.other_body is not None and abs(cylinder.other_body.centre_px[0] - 160) < 20
     assert cylinder.other_body.omega_rad_s == pytest.approx(0.5, rel=0.05)
+    # as the advice says, `roi` around the one meant keeps the other's points out of its fits
+    assert "`roi` around the one meant" in " ".join(cylinder.warnings)
+    kept_out = analyze(samples / "two_bodies.mp4", AnalysisConfig(fixation_px=(479.0, 180.0),
+                                                                   tracker=TrackerConfig(roi=Roi(380, 50, 200, 260))))
+    assert kept_out.omega_rad_s == pytest.approx(1.2, rel=0.01) and kept_out.verdict.quality == "good"
     one = analyze(samples / "box_ortho.mp4", AnalysisConfig(fixation_px=None))
     assert one.other_body is None
 

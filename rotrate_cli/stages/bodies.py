@@ -128,9 +128,13 @@ def another_body_seen(groups: tuple[TurningGroup, ...], omega_rad_s: float, fixa
     x, y = other.centre_px
     measured = (f"the rate reported is the body's about ({fixation_px[0]:.0f}, {fixation_px[1]:.0f}) px"
                 if all(math.isfinite(v) for v in fixation_px) else "the rate reported is another's")
+    # `roi` keeps the other body's points out of the fits: seen from the side, its tracks' arcs about
+    # an axis given at the other one fit slow rates that pass the rejection (the two-bodies sample
+    # about the cylinder's axis: 0.30 rad/s, weak, for 1.2; with `roi` around it, 1.2006, good)
     note = (f"another body turns in the picture: about {other.omega_rad_s:.3g} rad/s about ({x:.0f}, {y:.0f}) px, "
-            f"from {other.tracks} tracks going round it; {measured}; `segment` measures each")
+            f"from {other.tracks} tracks going round it; {measured}; `roi` around the one meant keeps the "
+            "other's points out, and `segment` measures each")
     because = "" if fixation_given else ("two bodies turn at different rates, and which one is meant is not "
-                                         "known: give the axis of the one meant")
+                                         "known: give the axis of the one meant, and `roi` around it")
     return AnotherBody(other, note, because)
 
