@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
+from rotrate_cli.scene.circles import circle_view
 from rotrate_cli.scene.disc import (
     LAG_SHARES,
     Candidate,
@@ -41,6 +42,9 @@ from rotrate_cli.scene.disc import (
 )
 from rotrate_cli.video.frames import Frame
 
+#: A reading whose interval is wider than this fraction of its rate either way is read again
+#: through the view the picture's circles tell (:func:`_through_circles`).
+CIRCLES_WANTED = 0.02
 #: Frames kept (in runs of two consecutive ones, evenly over the clip), and their longer side, px.
 MOST_KEPT = 128
 SIDE_PX = 320
@@ -321,7 +325,31 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
                 if angle.score >= NEARLY_AS_WELL * taken.score and not _clearly_short(angle, taken)]
     low = min(angle.omega_low_rad_s for angle in readings)
     high = max(angle.omega_high_rad_s for angle in readings)
-    return replace(taken, omega_low_rad_s=low, omega_high_rad_s=high, view=taken.view.scaled(1.0 / scale))
+    taken = replace(taken, omega_low_rad_s=low, omega_high_rad_s=high)
+    if high - low > 2.0 * CIRCLES_WANTED * taken.omega_rad_s:
+        taken = _through_circles(changes, kept, taken) or taken
+    return replace(taken, view=taken.view.scaled(1.0 / scale))
+
+
+def _through_circles(changes: list[_Change], kept: list[tuple[int, float, np.ndarray]],
+                     taken: PictureAngle) -> PictureAngle | None:
+    """The reading through the view the picture's circles tell (:mod:`rotrate_cli.scene.circles`),
+    its interval over the views they hold, where it is closer than ``taken`` (read through the view
+    the changes tell, the reduced frames' pixels) and the changes line up through it no worse; None
+    where the circles tell no one view (rivals nearly as coherent whose rates differ)."""
+    found = circle_view(np.mean([image for _, _, image in kept], axis=0, dtype=np.float32), taken.view)
+    if found is None:
+        return None
+    reading = _through(changes, found.view, found.held)
+    if (reading is None or _clearly_short(reading, taken)
+            or reading.omega_high_rad_s - reading.omega_low_rad_s >= taken.omega_high_rad_s - taken.omega_low_rad_s):
+        return None
+    half = 0.5 * (reading.omega_high_rad_s - reading.omega_low_rad_s)
+    for rival in found.rivals:
+        other = _through(changes, rival, ())
+        if other is None or abs(other.omega_rad_s - reading.omega_rad_s) > half:
+            return None
+    return reading
 
 
 def _readings(changes: list[_Change], views: list[Candidate]) -> list[PictureAngle]:
@@ -408,8 +436,11 @@ def _clearly_short_of(times_s: np.ndarray, heights: np.ndarray, best_times_s: np
     return float(np.mean(shortfall)) < -CLEARLY_SHORT * max(error, 1e-9)
 
 
-def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
-    """The angle and rate through ``view`` (the reduced frames' pixels); None where it tells none."""
+def _through(changes: list[_Change], view: DiscView, held: tuple[DiscView, ...] | None = None) -> PictureAngle | None:
+    """The angle and rate through ``view`` (the reduced frames' pixels); None where it tells none.
+    ``held``: the view moved as far as other evidence holds it each way (its circles:
+    :mod:`rotrate_cli.scene.circles`), over which the rate's spread is taken instead of over what
+    the changes hold (:func:`_view_spread`)."""
     if view.tilt_deg > MOST_TILT_DEG or view.focal_px < SHORTEST_FOCAL * changes[0].first.shape[1]:
         return None  # a plane edge on (a side view: its picture does not turn), or no lens a camera has
     unrolled_changes = _unrolled_changes(changes, view, ANGLES, RINGS)
@@ -425,7 +456,8 @@ def _through(changes: list[_Change], view: DiscView) -> PictureAngle | None:
     del unrolled_changes
     if not math.isfinite(rate):
         return None
-    spread = _view_spread(changes, view, times, angles)
+    spread = _view_spread(changes, view, times, angles) if held is None else _held_spread(changes, view, times,
+                                                                                            angles, held)
     # at least what reading the shifts to a tenth of the unrolled picture's step allows over the
     # turn seen (a rendered fan's 1.9 turns: -0.0018% within +-0.0017%, missing by a hair)
     half = max(1.96 * scatter + spread, READ_TO_DEG * abs(rate) / turned)
@@ -705,6 +737,20 @@ def _view_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angl
         for key in [key for key in memo if key[0] == way]:
             del memo[key]  # (a few MB each)
     return max(moved) if moved else 0.0
+
+
+def _held_spread(changes: list[_Change], view: DiscView, times: np.ndarray, angles_deg: np.ndarray,
+                 held: tuple[DiscView, ...]) -> float:
+    """How far the rate moves (degrees a second) through the views ``held`` (``view`` moved as far
+    as other evidence holds it each way), measured coarsely as :func:`_view_spread` does; infinite
+    where one of them tells no rate."""
+    coarse = (256, 64)
+    base, _ = _rate_of(changes, _unrolled_changes(changes, view, *coarse)[2], times, angles_deg, edges_out=False)
+    moved = [0.0]
+    for other in held:
+        rate = _rate_of(changes, _unrolled_changes(changes, other, *coarse)[2], times, angles_deg, edges_out=False)[0]
+        moved.append(abs(rate - base) if math.isfinite(rate) and math.isfinite(base) else math.inf)
+    return max(moved)
 
 
 #: The ways :func:`_varied` moves a view: the lens (a factor), the axis's point across and down
