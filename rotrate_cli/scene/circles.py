@@ -31,6 +31,8 @@ from rotrate_cli.scene.disc import DiscView, unrolled
 #: The picture is unrolled at this many angles a turn and rings.
 ANGLES = 120
 RINGS = 200
+#: The picture is smoothed first by this share of its width (a pixel of the 320-px frames kept).
+SMOOTHING_SHARE = 1.0 / 320.0
 #: Rings seen at fewer than this share of the angles are left out.
 SEEN_SHARE = 0.1
 #: A view whose coherence is under this tells nothing (a textured disc with no circle: 0.05-0.2;
@@ -54,15 +56,15 @@ MOST_TILT_DEG = 80.0
 SIMPLEX = (2.0, 2.0, 2.0, 2.0, 0.2)
 TOLERANCE = 0.01
 MOST_EVALUATIONS = 300
-#: Every start is searched coarsely first (angles, rings; evaluations), and the best, with the
-#: starts whose coarse coherence comes near it (:data:`RIVALS`), again in full.
+#: Every start is searched coarsely first (angles, rings; evaluations), and the best again in
+#: full; the others whose coarse coherence comes near it (:data:`RIVALS`) are its rivals.
 COARSE = (60, 150)
 COARSE_EVALUATIONS = 120
 #: How far the circles hold the view: to where they line up this share less well than through the
 #: view found, along each principal direction of the coherence's curvature (measured by central
 #: differences of these steps: the axis's point, px of the picture searched; the tilt's
 #: components, degrees; the lens's logarithm), at most this many steps.
-DROP = 0.02
+DROP = 0.15
 HESSIAN_STEPS = (0.25, 0.25, 0.25, 0.25, 0.02)
 FARTHEST = 16.0
 
@@ -75,7 +77,7 @@ class CircleView:
         view: the view (the picture's pixels, as searched).
         coherence: how well its circles line up (1 at best).
         held: the view moved each way as far as the circles hold it (:func:`_held`).
-        rivals: other views nearly as coherent (:data:`RIVALS`), found from other starts.
+        rivals: other views nearly as coherent (:data:`RIVALS`), found coarsely from other starts.
     """
 
     view: DiscView
@@ -181,6 +183,9 @@ def circle_view(image: np.ndarray, start: DiscView) -> CircleView | None:
     searched from ``start`` and from it through other lenses (:data:`START_FOCAL_WIDTHS`); None
     where no view lines circles up (:data:`MIN_COHERENCE`)."""
     width = image.shape[1]
+    # fine grooves sampled by the rings alias: the coherence then rises and falls along the lens
+    # every 15% (a rendered record's 3-px grooves: peaks at 800 and 920 px, the truth 768)
+    image = cv2.GaussianBlur(image, (0, 0), SMOOTHING_SHARE * width)
     lenses = [start.focal_px] + [widths * width for widths in START_FOCAL_WIDTHS
                                  if abs(math.log(widths * width / start.focal_px)) > 0.2]
     # the tilt either way about its long axis: seen from far off, a circle tilted towards the
@@ -190,10 +195,9 @@ def circle_view(image: np.ndarray, start: DiscView) -> CircleView | None:
     starts = [replace(start, focal_px=focal, long_axis_deg=start.long_axis_deg + turn)
               for focal in lenses for turn in (0.0, 180.0)]
     screened = [_search(image, first, coarse=True) for first in starts]
-    top = max(value for _, value in screened)
-    found = [_search(image, view) for view, value in screened if value >= RIVALS * top]
-    best, best_coherence = max(found, key=lambda item: item[1])
+    top_view, top = max(screened, key=lambda item: item[1])
+    best, best_coherence = _search(image, top_view)
     if best_coherence < MIN_COHERENCE:
         return None
-    rivals = tuple(view for view, value in found if view is not best and value >= RIVALS * best_coherence)
+    rivals = tuple(view for view, value in screened if view is not top_view and value >= RIVALS * top)
     return CircleView(best, best_coherence, _held(image, best, coherence(image, best)), rivals)
