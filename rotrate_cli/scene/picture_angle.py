@@ -15,7 +15,8 @@ offset: the shift between nearby changes is pulled a little towards none by what
 turning (the shared record read 1.7% slow from steps of 8 degrees, 0.0% over 170), and an offset
 common to every pair does not bias the slope. The interval holds the fit's scatter and how far the
 rate moves when the view's lens and tilt are varied within what the picture allows (a view found
-from part of a turn is uncertain, and turns the picture unevenly where wrong).
+from part of a turn is uncertain, and turns the picture unevenly where wrong). Where that leaves
+the interval wide, the view the picture's circles tell is read too (:mod:`rotrate_cli.scene.circles`).
 """
 
 from __future__ import annotations
