@@ -66,7 +66,8 @@ def test_a_records_circles_tell_its_view_from_a_loose_start(rng: np.random.Gener
     0.3 degrees, the point within a pixel and the lens within 10%; and the views they hold take in
     the truth's tilt."""
     picture = _mean_picture(rng)
-    start = DiscView((TRUE_VIEW.centre_px[0] + 3, TRUE_VIEW.centre_px[1] - 3), 3.0, TILT_DEG - 3, 0.33 * TRUE_VIEW.focal_px)
+    x, y = TRUE_VIEW.centre_px
+    start = DiscView((x + 3, y - 3), 3.0, TILT_DEG - 3, 0.33 * TRUE_VIEW.focal_px)
     found = circle_view(picture, start)
     assert found is not None and found.coherence > MIN_COHERENCE
     assert math.cos(math.radians(found.view.long_axis_deg)) < -0.99  # the near side at the bottom
