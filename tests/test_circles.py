@@ -23,9 +23,11 @@ FOCAL_WIDTHS, TILT_DEG, CENTRE = 1.2, 50.0, (0.5, 0.55)
 RADIUS_PX = 220
 
 
-def _record(rng: np.random.Generator, radius: int = RADIUS_PX, grooves: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """A record's face (grooves and bands alike at every angle, a label of blobs, dust) and its
-    disc's mask, ``2 radius`` px square; without ``grooves``, blobs all over (no circle but its rim)."""
+def _record(rng: np.random.Generator, radius: int = RADIUS_PX, grooves: bool = True,
+            label_cells: tuple[int, ...] = (6, 16, 40)) -> tuple[np.ndarray, np.ndarray]:
+    """A record's face (grooves and bands alike at every angle, a label of blobs of ``label_cells``,
+    dust) and its disc's mask, ``2 radius`` px square; without ``grooves``, blobs all over (no
+    circle but its rim)."""
     side = 2 * radius
     yy, xx = np.mgrid[:side, :side].astype(np.float32)
     r = np.hypot(xx - radius + 0.5, yy - radius + 0.5)
@@ -35,7 +37,7 @@ def _record(rng: np.random.Generator, radius: int = RADIUS_PX, grooves: bool = T
         for _ in range(60):
             x, y = rng.uniform(0, side, 2)
             cv2.circle(face, (int(x), int(y)), int(rng.integers(1, 3)), float(rng.uniform(90, 200)), -1)
-        label = blob_texture(rng, side, (6, 16, 40)) * 0.6 + 90
+        label = blob_texture(rng, side, label_cells) * 0.6 + 90
         face = np.where(r < 0.33 * radius, label, face)
     else:
         face = blob_texture(rng, side, (8, 24, 64))
@@ -88,11 +90,12 @@ def test_a_disc_with_no_circle_tells_no_view(rng: np.random.Generator) -> None:
 
 def test_a_third_of_a_tilted_records_turn_is_read_through_its_circles(rng: np.random.Generator,
                                                                        tmp_path: Path) -> None:
-    """A record tilted 50 degrees before a 45-degree lens, a third of a turn at 3.49 rad/s: its
-    changes hold its view loosely (the bench's like render: +-16%, weak). Through the view its
-    circles tell it reads within 1%, good, its interval holding the truth."""
+    """A record tilted 50 degrees before a 45-degree lens, a third of a turn at 3.49 rad/s, its
+    label's print coarse (few points to follow, so no plane from its tracks): its changes hold its
+    view loosely (+1.3% within +-10%, weak). Through the view its circles tell it reads within 1%,
+    good, its interval holding the truth."""
     omega, fps = 3.49, 30.0
-    face, disc = _record(rng)
+    face, disc = _record(rng, label_cells=(4, 8))
     backdrop = 120.0 + cv2.GaussianBlur(rng.normal(0, 25, (HEIGHT, WIDTH)).astype(np.float32), (0, 0), 6)
     frames = int(round(0.3 * 2 * math.pi / omega * fps)) + 1
     clip = tmp_path / "record.mp4"
@@ -103,3 +106,4 @@ def test_a_third_of_a_tilted_records_turn_is_read_through_its_circles(rng: np.ra
     assert analysis.omega_rad_s == pytest.approx(omega, rel=0.01)
     assert analysis.omega_low_rad_s <= omega <= analysis.omega_high_rad_s
     assert analysis.quality == "good"
+    assert any("the plane's view its circles tell" in warning for warning in analysis.warnings)

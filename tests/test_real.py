@@ -777,8 +777,8 @@ def test_a_third_of_the_wheels_turn_under_a_rolling_camera_is_not_narrowed_by_it
 def test_the_record_upside_down_is_not_narrowed_by_one_circle() -> None:
     """The shared record turned upside down, 0.9 of a turn from 8 s: its label's edge is its one
     clear circle, which holds the view only along a valley. Through the view it told, the record read
-    -7.3% within [-11.4%, -3.3%], good, missing; its changes' own reading (+23%) lay outside that,
-    and the circles narrow a reading only where the two agree."""
+    -7.3% within [-11.4%, -3.3%], good, missing. The record fills the picture: nothing still shows
+    the camera's motion, and there the circles are not sought."""
     clip = VIDEOS / "record_oblique_closeup.mp4"
     need(clip, "the record video")
     import tempfile

@@ -170,6 +170,8 @@ class PictureAngle:
         camera_turn_deg_s: the camera's own turn (degrees a second, anticlockwise as the picture
             shows it) taken out of the reading, as the picture around the plane showed it
             (:mod:`rotrate_cli.scene.backdrop`); 0 where none was.
+        view_from_circles: read through the view the picture's circles tell
+            (:mod:`rotrate_cli.scene.circles`), not the one its changes do.
     """
 
     omega_rad_s: float
@@ -192,6 +194,7 @@ class PictureAngle:
     plane_changes: bool = False
     plane_placed: bool = False
     camera_turn_deg_s: float = 0.0
+    view_from_circles: bool = False
 
 
 class AngleFrames:
@@ -338,7 +341,8 @@ def _through_circles(changes: list[_Change], kept: list[tuple[int, float, np.nda
     """The reading through the view the picture's circles tell (:mod:`rotrate_cli.scene.circles`),
     its interval over the views they hold, where it is closer than ``taken`` (read through the view
     the changes tell, the reduced frames' pixels) and the changes line up through it no worse; None
-    where the circles tell no view, or one no closer than ``taken``'s."""
+    where the circles tell no view, or one no closer than ``taken``'s. (Not sought where nothing
+    still shows the camera: :func:`measure_angle`'s ``circles``.)"""
     found = circle_view(np.mean([image for _, _, image in kept], axis=0, dtype=np.float32), taken.view)
     if found is None:
         return None
@@ -349,13 +353,7 @@ def _through_circles(changes: list[_Change], kept: list[tuple[int, float, np.nda
     if (reading is None or _clearly_short(reading, taken)
             or reading.omega_high_rad_s - reading.omega_low_rad_s >= taken.omega_high_rad_s - taken.omega_low_rad_s):
         return None
-    # two readings of one turn: the circles narrow it only where the changes' own reading agrees (a
-    # circle or two alone hold a view only along a valley: the shared record upside down, 0.9 of a
-    # turn from 8 s, its label's edge the one clear circle, read -7.3% within [-11.4%, -3.3%]
-    # through them, +23% through its changes' view)
-    if not reading.omega_low_rad_s <= taken.omega_rad_s <= reading.omega_high_rad_s:
-        return None
-    return reading
+    return replace(reading, view_from_circles=True)
 
 
 def _readings(changes: list[_Change], views: list[Candidate]) -> list[PictureAngle]:

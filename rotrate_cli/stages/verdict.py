@@ -685,7 +685,8 @@ def _by_angle(angle: PictureAngle, tracks: Combined | None, tracks_used: int, do
     omega, low, high = angle.omega_rad_s, angle.omega_low_rad_s, angle.omega_high_rad_s
     weak: list[str] = []
     notes = [f"the rate is the picture's own turning: {angle.turned_deg:.0f} degrees seen turned, measured through "
-             f"the plane's view (tilted {angle.view.tilt_deg:.0f} degrees)" if not (angle.thin_part or angle.plane) else
+             f"the plane's view{' its circles tell' if angle.view_from_circles else ''} (tilted "
+             f"{angle.view.tilt_deg:.0f} degrees)" if not (angle.thin_part or angle.plane) else
              f"the rate is the picture's own turning: a thin part (a hand, a needle) against the clip's still picture, "
              f"{angle.turned_deg:.0f} degrees seen turned (its plane tilted {angle.view.tilt_deg:.0f} degrees, as its "
              "length shows)" if angle.thin_part else
