@@ -200,4 +200,4 @@ def circle_view(image: np.ndarray, start: DiscView) -> CircleView | None:
     if best_coherence < MIN_COHERENCE:
         return None
     rivals = tuple(view for view, value in screened if view is not top_view and value >= RIVALS * top)
-    return CircleView(best, best_coherence, _held(image, best, coherence(image, best)), rivals)
+    return CircleView(best, best_coherence, _held(image, best, best_coherence), rivals)
