@@ -50,7 +50,7 @@ from rotrate_cli.stages.fits import (
 )
 from rotrate_cli.stages.geometry import Geometry, locate, measure
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
-from rotrate_cli.stages.roll import roll_note, sway_note, unsteady_camera_period
+from rotrate_cli.stages.roll import roll_note, sway_note, turned_back_positions, unsteady_camera_period
 from rotrate_cli.stages.tracks import NO_BACKGROUND_NOTE, Footage, NothingTracked, ProgressCallback, read_footage
 from rotrate_cli.stages.verdict import Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
@@ -334,10 +334,11 @@ def _picture_turning(footage: Footage, geometry: Geometry, view_tracks: pd.DataF
     view = view_from_paths(view_tracks, rate) if view_tracks is not None else None
     if view_tracks is None or not not_side_view(view, view_tracks):
         return None  # seen from the side the picture does not turn: a test of its turning says nothing
+    roll = (footage.pairs.roll_deg_s, footage.pairs.roll_start_s)
     if view is None:
-        return picture_turning(footage.pairs.pairs, geometry.fixation_px, footage.info.width_px, rate)
+        return picture_turning(footage.pairs.pairs, geometry.fixation_px, footage.info.width_px, rate, roll=roll)
     ellipse = (view.across_deg, math.sin(math.radians(view.elevation_deg)))
-    return picture_turning(footage.pairs.pairs, view.centre_px, footage.info.width_px, rate, ellipse)
+    return picture_turning(footage.pairs.pairs, view.centre_px, footage.info.width_px, rate, ellipse, roll)
 
 
 def _angle_guess(footage: Footage, config: AnalysisConfig) -> float:
@@ -381,7 +382,11 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
     tracks_rate = combined if combined.tracks_used > 0 else None
     if period is not None and period.roll_deg_s:
         # the camera rolled (the picture came back only with that taken out): the picture's
-        # turning is read with it taken out too, about an axis that then stays put
+        # turning is read with it taken out too, about an axis that then stays put, and so are
+        # the tracks' paths that tell its view
+        if view_tracks is not None:
+            view_tracks = turned_back_positions(view_tracks, period.roll_deg_s, footage.pairs.start_s,
+                                                (footage.info.width_px, footage.info.height_px))
         footage = replace(footage, pairs=footage.pairs.turned_back(period.roll_deg_s))
     if period is not None and (period.roll_deg_s or period.sway_deg):
         # the tracks, followed in the rolling or swaying picture with nothing still to take the

@@ -127,3 +127,27 @@ def test_a_rolling_and_swaying_camera_s_roll_is_found() -> None:
     assert found.roll_deg_s == pytest.approx(3.0, abs=0.5)
     assert found.period_s == pytest.approx(2.5, rel=0.005)
     assert found.period_low_s <= 2.5 <= found.period_high_s
+
+
+def test_tracks_are_turned_back_as_the_pictures_are() -> None:
+    """A point's position turned back by a camera's roll lands where the picture turned back by the
+    same roll shows it: the tracks' paths and the pictures stay in one frame (the rolled record's
+    view was sought from paths the roll had turned)."""
+    import pandas as pd
+
+    from rotrate_cli.scene.picture_angle import turned_back as turned_back_picture
+    from rotrate_cli.stages.roll import turned_back_positions
+
+    size = (320, 180)
+    points = [(250.0, 40.0, 2.0), (60.0, 150.0, 5.0)]  # x, y, time since the start
+    tracks = pd.DataFrame({"track": [0, 1], "time_s": [t for _, _, t in points],
+                           "x_px": [x for x, _, _ in points], "y_px": [y for _, y, _ in points]})
+    turned = turned_back_positions(tracks, 4.0, 0.0, size)
+    for (x, y, time_s), (_, row) in zip(points, turned.iterrows(), strict=True):
+        image = np.zeros((size[1], size[0]), np.uint8)
+        cv2.circle(image, (round(x), round(y)), 3, 255, -1)
+        back = turned_back_picture(image, 4.0 * time_s).astype(float)
+        rows, columns = np.mgrid[:size[1], :size[0]]
+        seen = (float((back * columns).sum() / back.sum()), float((back * rows).sum() / back.sum()))
+        assert math.hypot(seen[0] - row["x_px"], seen[1] - row["y_px"]) < 0.5
+        assert math.hypot(x - row["x_px"], y - row["y_px"]) > 2.0  # (it did move)

@@ -58,6 +58,29 @@ def test_the_picture_s_turning_tells_a_fifth_of_a_turn(tmp_path: Path) -> None:
     assert found.omega_low_rad_s <= 2.0 <= found.omega_high_rad_s and found.omega_high_rad_s < 2.5
 
 
+def test_the_picture_s_turning_turns_its_axis_with_a_rolling_camera(tmp_path: Path) -> None:
+    """A camera rolling 15 degrees a second clockwise over a five-bladed fan whose axis lies off the
+    picture's middle: the pairs, as the camera saw them, are tested about the axis turned with the
+    camera, and the camera's turn between a pair's frames added to the body's, so the fifth of a
+    turn is still told (the roll recorded, not the pictures turned back: see FramePairs.turned_back)."""
+    roll = -15.0
+    scene = RotorScene("fan", 5, 2.0, duration_s=2.0, centre_px=(180.0, 150.0), roll_deg_s=roll, seed=5)
+    path = tmp_path / "fan.mp4"
+    write_rotor_clip(scene, path)
+    pairs = FramePairs()
+    for _ in pairs.tap(FrameSource(path).frames(grey=True)):
+        pass
+    middle = ((scene.width_px - 1) / 2.0, (scene.height_px - 1) / 2.0)
+    # where the axis is in the first frame (the rolled picture is enlarged by 1.15 about the middle)
+    start = (middle[0] + 1.15 * (scene.centre[0] - middle[0]), middle[1] + 1.15 * (scene.centre[1] - middle[1]))
+    rolled = pairs.turned_back(roll)
+    assert rolled.pairs == pairs.pairs and rolled.roll_deg_s == roll
+    found = picture_turning(rolled.pairs, start, scene.width_px, 5 * 2.0, roll=(roll, rolled.roll_start_s))
+    assert found is not None and found.sense == 1
+    # the best trial is the fifth itself (about the axis left where it started: 5.5 returns a turn)
+    assert found.omega_rad_s == pytest.approx(2.0) and found.omega_low_rad_s <= 2.0 <= found.omega_high_rad_s < 2.5
+
+
 def test_rotor_frames_are_the_exact_turn(tmp_path: Path) -> None:
     """The renderer turns the picture by omega t: a 72-degree turn of a 5-fold fan is the same picture."""
     scene = RotorScene("fan", 5, math.radians(72) * 30, noise=0.0, duration_s=0.1, seed=1)

@@ -234,8 +234,17 @@ class AngleFrames:
         (degrees a second, anticlockwise as the picture shows it) since ``start_s``."""
         copy = AngleFrames(self._most)
         copy._stride, copy.width_px = self._stride, self.width_px
-        copy._kept = [(index, time_s, turned_back(image, roll_deg_s * (time_s - start_s)))
-                      for index, time_s, image in self._kept]
+        # consecutive frames (whose change is measured) turned back together: see turned_back_together
+        runs: list[list[tuple[int, float, np.ndarray]]] = []
+        for kept in self._kept:
+            if runs and kept[0] == runs[-1][-1][0] + 1:
+                runs[-1].append(kept)
+            else:
+                runs.append([kept])
+        for run in runs:
+            images = turned_back_together([image for _, _, image in run],
+                                          [roll_deg_s * (time_s - start_s) for _, time_s, _ in run])
+            copy._kept += [(index, time_s, image) for (index, time_s, _), image in zip(run, images, strict=True)]
         return copy
 
 
@@ -246,6 +255,28 @@ def turned_back(image: np.ndarray, roll_deg: float, border: int = cv2.BORDER_CON
     rows, columns = image.shape[:2]
     matrix = cv2.getRotationMatrix2D(((columns - 1) / 2.0, (rows - 1) / 2.0), -roll_deg, 1.0)
     return cv2.warpAffine(image, matrix, (columns, rows), flags=cv2.INTER_LINEAR, borderMode=border)
+
+
+#: The pictures turned back together are kept this far (pixels) inside what every one of them shows.
+SHOWN_MARGIN_PX = 2
+
+
+def turned_back_together(images: list[np.ndarray], rolls_deg: list[float]) -> list[np.ndarray]:
+    """Each of ``images`` (pictures a moment apart) turned back by its camera's roll (as
+    :func:`turned_back`), and all of them black outside what every one of them shows: turned by
+    different rolls, their edges of the frame lie apart, and would change the picture where nothing
+    turned (the record rolled 3 degrees a second: its pairs of frames after 13 s, turned back by 40
+    degrees and more, told its turn's sense the wrong way as often as the right one)."""
+    turned = [turned_back(image, roll) for image, roll in zip(images, rolls_deg, strict=True)]
+    if not any(rolls_deg):
+        return turned
+    shown = np.full(images[0].shape[:2], 255, np.uint8)
+    for roll in rolls_deg:
+        shown = np.minimum(shown, turned_back(np.full(images[0].shape[:2], 255, np.uint8), roll))
+    shown = cv2.erode(shown, np.ones((2 * SHOWN_MARGIN_PX + 1,) * 2, np.uint8)) == 255
+    for image in turned:
+        image[~shown] = 0
+    return turned
 
 
 def reduced_grey(image: np.ndarray, side_px: int = SIDE_PX) -> np.ndarray:

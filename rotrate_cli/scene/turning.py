@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from rotrate_cli.scene.picture_angle import AngleFrames, reduced_grey, turned_back
+from rotrate_cli.scene.picture_angle import AngleFrames, reduced_grey
 from rotrate_cli.video.frames import Frame
 
 #: Pairs of consecutive frames kept over the clip (evenly spread), and their longer side, pixels.
@@ -71,6 +71,10 @@ class FramePairs:
         self._stride = 8
         self._pairs: list[tuple[float, np.ndarray, float, np.ndarray]] = []
         self._held: tuple[int, float, np.ndarray] | None = None
+        #: the camera's steady roll (degrees a second, anticlockwise as the picture shows it) from
+        #: ``roll_start_s`` on, as :meth:`turned_back` recorded it (the pairs are not turned back)
+        self.roll_deg_s = 0.0
+        self.roll_start_s = 0.0
 
     def clear(self) -> None:
         self._pairs.clear()
@@ -83,17 +87,26 @@ class FramePairs:
         """``(time_s, image, next_time_s, next_image)`` per pair kept."""
         return list(self._pairs)
 
-    def turned_back(self, roll_deg_s: float) -> FramePairs:
-        """A copy whose pictures are turned back about their centres by a camera's steady roll
-        (degrees a second, anticlockwise as the picture shows it; :mod:`rotrate_cli.stages.roll`),
-        so that the axis stays where it was."""
+    @property
+    def start_s(self) -> float:
+        """The time of the first picture kept (of the pairs, or for the angle): the moment from which
+        :meth:`turned_back` turns them back (0 where none is kept)."""
         times = [pair[0] for pair in self._pairs] + [kept[1] for kept in self.angle_frames.frames]
-        start_s = min(times) if times else 0.0
+        return min(times) if times else 0.0
+
+    def turned_back(self, roll_deg_s: float) -> FramePairs:
+        """A copy for a camera's steady roll (degrees a second, anticlockwise as the picture shows
+        it; :mod:`rotrate_cli.stages.roll`) since :attr:`start_s`: the frames for the angle turned
+        back about their centres, so that the axis stays where it was; the pairs as they are, with
+        the roll recorded (:attr:`roll_deg_s`)."""
+        start_s = self.start_s
         copy = FramePairs(self._most)
         copy._stride = self._stride
-        copy._pairs = [(time_s, turned_back(image, roll_deg_s * (time_s - start_s)), next_s,
-                        turned_back(following, roll_deg_s * (next_s - start_s)))
-                       for time_s, image, next_s, following in self._pairs]
+        # the pairs are kept as the camera saw them, the roll with them: their test turns its axis
+        # with the camera (:func:`turning_profile`) rather than the pictures back (each turned
+        # back, the record rolled 3 degrees a second told its sense the wrong way in 5 of 10 pairs)
+        copy._pairs = list(self._pairs)
+        copy.roll_deg_s, copy.roll_start_s = roll_deg_s, start_s
         copy.angle_frames = self.angle_frames.turned_back(roll_deg_s, start_s)
         return copy
 
@@ -146,15 +159,19 @@ def _misfit(first: np.ndarray, second: np.ndarray, mask: np.ndarray, matrix: np.
 
 
 def turning_profile(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], centre_px: tuple[float, float],
-                    width_px: int, return_rad_s: float,
-                    ellipse: tuple[float, float] | None = None) -> np.ndarray | None:
+                    width_px: int, return_rad_s: float, ellipse: tuple[float, float] | None = None,
+                    roll: tuple[float, float] = (0.0, 0.0)) -> np.ndarray | None:
     """For each tested pair (rows) and each of :data:`TRIALS` ``x`` (columns), how much better the
     pair's first frame turned by ``return_rad_s / x`` times their time apart matches its second
     frame one way than the other (anticlockwise minus clockwise); None where no pair shows motion.
     ``centre_px``: where the axis meets the picture, in the frame's own pixels (``width_px`` wide);
     ``ellipse``: the direction (degrees) and width (to its length) of the circles' pictures, for
-    an oblique view (None: face on)."""
+    an oblique view (None: face on). ``roll``: a camera's steady roll (degrees a second,
+    anticlockwise as shown) and the moment since which it turned the picture about its centre,
+    where ``centre_px`` and ``ellipse`` are as at that moment: each pair's axis and ellipse are
+    turned with the camera, and its turn between the two frames added to the body's."""
     chosen = pairs[:: max(1, len(pairs) // TESTED_PAIRS)][:TESTED_PAIRS]
+    roll_deg_s, roll_start_s = roll
     rows = []
     for time_s, first, next_s, second in chosen:
         step_s = next_s - time_s
@@ -163,26 +180,41 @@ def turning_profile(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], ce
             continue
         a, b, mask = moving
         scale = a.shape[1] / width_px
-        centre = (centre_px[0] * scale, centre_px[1] * scale)
+        centre, along = (centre_px[0] * scale, centre_px[1] * scale), ellipse
+        camera = None
+        if roll_deg_s:
+            middle = ((a.shape[1] - 1) / 2.0, (a.shape[0] - 1) / 2.0)
+            rolled = roll_deg_s * (time_s - roll_start_s)
+            centre = tuple(cv2.getRotationMatrix2D(middle, rolled, 1.0) @ np.array([*centre, 1.0]))
+            along = None if ellipse is None else (ellipse[0] - rolled, ellipse[1])
+            camera = cv2.getRotationMatrix2D(middle, roll_deg_s * step_s, 1.0)
         row = np.zeros(len(TRIALS))
         for index, x in enumerate(TRIALS):
             angle = math.degrees(return_rad_s / x * step_s)
             # positive: the turn anticlockwise as the picture shows it fits better
-            row[index] = (_misfit(a, b, mask, _turn_matrix(centre, -angle, ellipse))
-                          - _misfit(a, b, mask, _turn_matrix(centre, angle, ellipse)))
+            row[index] = (_misfit(a, b, mask, _then(_turn_matrix(centre, -angle, along), camera))
+                          - _misfit(a, b, mask, _then(_turn_matrix(centre, angle, along), camera)))
         rows.append(row)
     return np.array(rows) if rows else None
 
 
+def _then(matrix: np.ndarray, after: np.ndarray | None) -> np.ndarray:
+    """The 2x3 map ``matrix`` followed by the 2x3 map ``after`` (None: by nothing)."""
+    if after is None:
+        return matrix
+    return np.hstack([after[:, :2] @ matrix[:, :2], (after[:, :2] @ matrix[:, 2] + after[:, 2])[:, None]])
+
+
 def picture_turning(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], centre_px: tuple[float, float],
-                    width_px: int, return_rad_s: float,
-                    ellipse: tuple[float, float] | None = None) -> PictureTurning | None:
+                    width_px: int, return_rad_s: float, ellipse: tuple[float, float] | None = None,
+                    roll: tuple[float, float] = (0.0, 0.0)) -> PictureTurning | None:
     """The picture's rate of turning among those a return of ``return_rad_s`` allows (see the
     module's notes), with the range of trial rates that fit nearly as well as the best; None
-    where no trial stands out (a picture that does not turn, or too little that turns)."""
+    where no trial stands out (a picture that does not turn, or too little that turns).
+    ``roll``: as :func:`turning_profile`'s."""
     if not (math.isfinite(centre_px[0]) and math.isfinite(centre_px[1]) and return_rad_s > 0):
         return None  # no axis to turn about (none given, none found)
-    rows = turning_profile(pairs, centre_px, width_px, return_rad_s, ellipse)
+    rows = turning_profile(pairs, centre_px, width_px, return_rad_s, ellipse, roll)
     if rows is None or len(rows) < 2:
         return None
     profile = rows.sum(axis=0)
@@ -195,7 +227,11 @@ def picture_turning(pairs: list[tuple[float, np.ndarray, float, np.ndarray]], ce
     near = [x for x, value in zip(TRIALS, profile, strict=True) if sense * value >= NEAR_BEST * strength[best]]
     # the pairs' two halves must each find their best within that range: a test that a few pairs
     # sway (thin spokes, a picture turned a quarter) is no evidence
-    for half in (rows[0::2].sum(axis=0), rows[1::2].sum(axis=0)):
+    # (the earlier and the later pairs: every other pair, evenly spaced, can see the body at one
+    # side only where it turns about one and a half turns between pairs: the record rolled 3
+    # degrees a second, its pairs 2.67 s apart, saw its blank side of the label in every other)
+    middle = len(rows) // 2
+    for half in (rows[:middle].sum(axis=0), rows[middle:].sum(axis=0)):
         if not min(near) <= TRIALS[int(np.argmax(sense * half))] <= max(near):
             return None
     rates = [return_rad_s / x for x in near]

@@ -45,6 +45,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
+from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.scene.picture_angle import turned_back as turned_back_picture
 from rotrate_cli.stages.period import Differences, Period, changing_pixels, find_period, squared_differences
 
@@ -221,6 +222,23 @@ def turned_back(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int],
                                         cv2.BORDER_REPLICATE).ravel()
     turned[:, outside] = 0
     return turned
+
+
+def turned_back_positions(tracks: pd.DataFrame, roll_deg_s: float, start_s: float,
+                          size_px: tuple[int, int]) -> pd.DataFrame:
+    """A copy of a tracks table (``time_s, x_px, y_px``) whose positions are turned back about the
+    picture's centre (``size_px`` its width and height) by ``roll_deg_s`` times their time since
+    ``start_s``, as :func:`rotrate_cli.scene.picture_angle.turned_back` turns a picture: the paths
+    the body drew in a picture that did not roll (the rolled record's tracks, their ellipses turned
+    by the roll, were read as a side view's, and neither the picture's turning nor its angle was
+    sought)."""
+    centre_x, centre_y = (size_px[0] - 1) / 2.0, (size_px[1] - 1) / 2.0
+    # OpenCV's rotation by -roll (anticlockwise as shown, positive): the picture's own turn undone
+    angle = np.radians(-roll_deg_s * (tracks["time_s"].to_numpy(dtype=float) - start_s))
+    cosine, sine = np.cos(angle), np.sin(angle)
+    x = tracks["x_px"].to_numpy(dtype=float) - centre_x
+    y = tracks["y_px"].to_numpy(dtype=float) - centre_y
+    return tracks.assign(x_px=centre_x + cosine * x + sine * y, y_px=centre_y - sine * x + cosine * y)
 
 
 def sway_note(period: Period) -> str:
