@@ -254,3 +254,22 @@ def test_far_shifts_that_are_no_peak_or_lie_far_off_the_others_line_are_left_out
 
     found, _ = _rate_of(changes, correlate, times, chained)
     assert found == pytest.approx(rate, rel=0.005)
+
+
+def test_frames_turned_back_together_change_nowhere_the_camera_alone_turned() -> None:
+    """A still scene filmed by a rolling camera: its two frames, turned back by their rolls, show
+    the same picture; the frame's edges, turned by different rolls, are cut to what both show,
+    so that nothing changes between them (each turned back alone, the edges changed)."""
+    from rotrate_cli.scene.picture_angle import turned_back, turned_back_together
+
+    rng = np.random.default_rng(2)
+    scene = cv2.GaussianBlur(rng.uniform(0, 255, (400, 560)).astype(np.float32), (0, 0), 3.0)
+    centre = (279.5, 199.5)
+    frames, rolls = [], [10.0, 11.5]
+    for roll in rolls:  # the camera turned anticlockwise by ``roll``: the picture as it saw it
+        matrix = cv2.getRotationMatrix2D(centre, roll, 1.0)
+        frames.append(cv2.warpAffine(scene, matrix, (560, 400), flags=cv2.INTER_LINEAR)[80:320, 100:460].copy())
+    together = turned_back_together(frames, rolls)
+    alone = [turned_back(frame, roll) for frame, roll in zip(frames, rolls, strict=True)]
+    assert np.percentile(np.abs(together[1] - together[0]), 99.5) < 3.0
+    assert np.percentile(np.abs(alone[1] - alone[0]), 99.5) > 20.0
