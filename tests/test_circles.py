@@ -13,7 +13,7 @@ import pytest
 from benchmarks.scoring import plane_before_lens
 from rotrate_cli.analysis import analyze
 from rotrate_cli.config import AnalysisConfig
-from rotrate_cli.scene.circles import MIN_COHERENCE, circle_view, coherence
+from rotrate_cli.scene.circles import MIN_COHERENCE, circle_view, coherence, ellipse_starts
 from rotrate_cli.scene.disc import DiscView
 from tests.conftest import blob_texture, write_grey_clip
 
@@ -44,8 +44,9 @@ def _record(rng: np.random.Generator, radius: int = RADIUS_PX, grooves: bool = T
     return face.astype(np.float32), (r <= radius).astype(np.float32)
 
 
-def _seen(face: np.ndarray, disc: np.ndarray, angle_rad: float, backdrop: np.ndarray) -> np.ndarray:
-    turned = plane_before_lens((WIDTH, HEIGHT), FOCAL_WIDTHS, CENTRE, TILT_DEG, face.shape[0])(angle_rad)
+def _seen(face: np.ndarray, disc: np.ndarray, angle_rad: float, backdrop: np.ndarray,
+          tilt_deg: float = TILT_DEG) -> np.ndarray:
+    turned = plane_before_lens((WIDTH, HEIGHT), FOCAL_WIDTHS, CENTRE, tilt_deg, face.shape[0])(angle_rad)
     body = cv2.warpPerspective(face, turned, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
     cover = cv2.warpPerspective(disc, turned, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
     return backdrop * (1 - cover) + body * cover
@@ -107,3 +108,43 @@ def test_a_third_of_a_tilted_records_turn_is_read_through_its_circles(rng: np.ra
     assert analysis.omega_low_rad_s <= omega <= analysis.omega_high_rad_s
     assert analysis.quality == "good"
     assert any("the plane's view its circles tell" in warning for warning in analysis.warnings)
+
+
+def test_the_ellipses_a_records_picture_draws_start_the_circles_search(rng: np.random.Generator) -> None:
+    """With nothing else to start from, the longest ellipses the picture's edges draw (its rim, its
+    label's edge) are views near the truth: tilted within 3 degrees of it, about the same long
+    axis, their centres within 6% of the width (the lens draws a large circle's centre off the
+    axis: the rim's 32 px). From the rim's the search does not reach the truth (no view); from the
+    label's it does: the most coherent view found lies within a pixel of the axis's point."""
+    picture = _mean_picture(rng)
+    starts = ellipse_starts(picture)
+    assert len(starts) >= 2
+    for start in starts:
+        assert start.tilt_deg == pytest.approx(TILT_DEG, abs=3.0)
+        assert abs(math.sin(math.radians(start.long_axis_deg - TRUE_VIEW.long_axis_deg))) < 0.05
+        assert math.dist(start.centre_px, TRUE_VIEW.centre_px) < 0.06 * WIDTH
+    found = max((view for start in starts if (view := circle_view(picture, start)) is not None),
+                key=lambda view: view.coherence)
+    assert math.dist(found.view.centre_px, TRUE_VIEW.centre_px) < 1.0
+    assert found.view.tilt_deg == pytest.approx(TILT_DEG, abs=0.3)
+    assert ellipse_starts(np.full((HEIGHT, WIDTH), 90.0, np.float32)) == []  # a plain picture draws none
+
+
+def test_a_record_tilted_65_degrees_turning_9_degrees_a_frame_is_read_from_its_circles_alone(
+        rng: np.random.Generator, tmp_path: Path) -> None:
+    """A third of a turn of a record tilted 65 degrees at 4.71 rad/s (9 degrees a frame, 12
+    frames): no point is followed long enough, and no view its changes tell (searched from face on)
+    gives a rate, so there was no result. The view its circles tell, searched from the ellipses
+    its picture draws, reads it within 1%, good."""
+    omega, fps, tilt = 4.71, 30.0, 65.0
+    face, disc = _record(rng)
+    backdrop = 120.0 + cv2.GaussianBlur(rng.normal(0, 25, (HEIGHT, WIDTH)).astype(np.float32), (0, 0), 6)
+    frames = int(round(0.3 * 2 * math.pi / omega * fps)) + 1
+    clip = tmp_path / "record.mp4"
+    write_grey_clip(clip, (_seen(face, disc, omega * k / fps, backdrop, tilt) + rng.normal(0, 2, (HEIGHT, WIDTH))
+                           for k in range(frames)), (WIDTH, HEIGHT), fps)
+    analysis = analyze(clip, AnalysisConfig(fixation_px=None))
+    assert analysis.rate_from == "turning"
+    assert analysis.omega_rad_s == pytest.approx(omega, rel=0.01)
+    assert analysis.omega_low_rad_s <= omega <= analysis.omega_high_rad_s
+    assert analysis.quality == "good"

@@ -69,6 +69,17 @@ HESSIAN_STEPS = (0.25, 0.25, 0.25, 0.25, 0.02)
 FARTHEST = 16.0
 
 
+#: Where nothing else tells a view to start from, the circles' pictures do: ellipses fitted to the
+#: edges of the picture (contours at least this share of its width long, their points within this
+#: many pixels of the ellipse, its short axis at least this share of the width and this share of
+#: its long one: a plane tilted 80 degrees at most), the longest this many.
+ELLIPSE_LENGTH_SHARE = 0.1
+ELLIPSE_WITHIN_PX = 1.0
+ELLIPSE_SHORTEST_SHARE = 0.03
+ELLIPSE_ROUNDEST = math.cos(math.radians(MOST_TILT_DEG))
+ELLIPSE_STARTS = 3
+
+
 @dataclass(frozen=True)
 class CircleView:
     """The view the circles tell, and how closely.
@@ -201,3 +212,34 @@ def circle_view(image: np.ndarray, start: DiscView) -> CircleView | None:
         return None
     rivals = tuple(view for view, value in screened if view is not top_view and value >= RIVALS * top)
     return CircleView(best, best_coherence, _held(image, best, best_coherence), rivals)
+
+
+def ellipse_starts(image: np.ndarray) -> list[DiscView]:
+    """Views to start :func:`circle_view` from where nothing else tells one: each of the longest
+    ellipses the picture's edges draw (:data:`ELLIPSE_STARTS`), seen as a circle tilted by the
+    arc cosine of its short axis over its long one, about its long axis, through a 45-degree lens
+    (the search moves the axis's point off the ellipse's centre, where the lens draws it off).
+    ``image``: grey, float32 (the mean of a clip's frames)."""
+    width = image.shape[1]
+    smooth = cv2.GaussianBlur(image, (0, 0), 1.0)
+    levels = cv2.normalize(smooth, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
+    contours, _ = cv2.findContours(cv2.Canny(levels, 30, 90), cv2.RETR_LIST, cv2.CHAIN_APPROX_NONE)
+    found = []
+    for contour in contours:
+        if len(contour) < ELLIPSE_LENGTH_SHARE * width:
+            continue
+        (x, y), (first, second), angle = cv2.fitEllipse(contour)
+        long_, short = max(first, second) / 2.0, min(first, second) / 2.0
+        if short < ELLIPSE_SHORTEST_SHARE * width or short < ELLIPSE_ROUNDEST * long_ or long_ > 3.0 * width:
+            continue
+        along = math.radians(angle if first >= second else angle + 90.0)
+        points = contour[:, 0, :].astype(np.float64) - (x, y)
+        u = points[:, 0] * math.cos(along) + points[:, 1] * math.sin(along)
+        v = -points[:, 0] * math.sin(along) + points[:, 1] * math.cos(along)
+        if float(np.median(np.abs(np.hypot(u / long_, v / short) - 1.0))) * short > ELLIPSE_WITHIN_PX:
+            continue  # no ellipse: a contour that only roughly closes
+        found.append((len(contour), DiscView((x, y), math.degrees(along) % 180.0,
+                                             math.degrees(math.acos(min(1.0, short / long_))),
+                                             START_FOCAL_WIDTHS[0] * width)))
+    found.sort(key=lambda item: -item[0])
+    return [view for _, view in found[:ELLIPSE_STARTS]]
