@@ -45,8 +45,8 @@ def _record(rng: np.random.Generator, radius: int = RADIUS_PX, grooves: bool = T
 
 
 def _seen(face: np.ndarray, disc: np.ndarray, angle_rad: float, backdrop: np.ndarray,
-          tilt_deg: float = TILT_DEG) -> np.ndarray:
-    turned = plane_before_lens((WIDTH, HEIGHT), FOCAL_WIDTHS, CENTRE, tilt_deg, face.shape[0])(angle_rad)
+          tilt_deg: float = TILT_DEG, centre: tuple[float, float] = CENTRE) -> np.ndarray:
+    turned = plane_before_lens((WIDTH, HEIGHT), FOCAL_WIDTHS, centre, tilt_deg, face.shape[0])(angle_rad)
     body = cv2.warpPerspective(face, turned, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
     cover = cv2.warpPerspective(disc, turned, (WIDTH, HEIGHT), flags=cv2.INTER_LINEAR)
     return backdrop * (1 - cover) + body * cover
@@ -148,3 +148,24 @@ def test_a_record_tilted_65_degrees_turning_9_degrees_a_frame_is_read_from_its_c
     assert analysis.omega_rad_s == pytest.approx(omega, rel=0.01)
     assert analysis.omega_low_rad_s <= omega <= analysis.omega_high_rad_s
     assert analysis.quality == "good"
+
+
+def test_no_view_is_read_from_the_circles_alone_about_an_axis_out_of_the_picture(rng: np.random.Generator) -> None:
+    """A record tilted 60 degrees, its axis above the picture: only arcs of its circles are seen,
+    and they line up through views far apart (bench-turning's disc so placed read +21% within
+    [+16%, +26%] through one). Read from its circles alone only where its axis lies in the picture:
+    here none; the same record with its axis in the picture is read."""
+    from rotrate_cli.scene.picture_angle import _changes, _circles_alone, reduced_grey
+
+    face, disc = _record(rng)
+    backdrop = 120.0 + cv2.GaussianBlur(rng.normal(0, 25, (HEIGHT, WIDTH)).astype(np.float32), (0, 0), 6)
+
+    def kept(centre: tuple[float, float]) -> list:
+        return [(k, k / 30.0, reduced_grey(np.clip(_seen(face, disc, 0.157 * k, backdrop, 60.0, centre), 0, 255)))
+                for k in range(12)]
+
+    above = kept((0.5, -0.15))
+    assert _circles_alone(_changes(above), above) is None
+    inside = kept(CENTRE)
+    reading = _circles_alone(_changes(inside), inside)
+    assert reading is not None and reading.omega_rad_s == pytest.approx(0.157 * 30.0, rel=0.01)
