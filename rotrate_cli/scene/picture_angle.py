@@ -370,40 +370,47 @@ def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, wi
 
 def _through_circles(changes: list[_Change], kept: list[tuple[int, float, np.ndarray]],
                      taken: PictureAngle) -> PictureAngle | None:
-    """The reading through the view the picture's circles tell (:mod:`rotrate_cli.scene.circles`),
-    its interval over the views they hold, where it is closer than ``taken`` (read through the view
-    the changes tell, the reduced frames' pixels) and the changes line up through it no worse; None
-    where the circles tell no view, or one no closer than ``taken``'s. (Not sought where nothing
-    still shows the camera: :func:`measure_angle`'s ``circles``.)"""
-    found = circle_view(np.mean([image for _, _, image in kept], axis=0, dtype=np.float32), taken.view)
-    if found is None:
-        return None
-    # the interval holds the rates through the views the circles do not tell from it: along its
-    # valleys, and other starts' views nearly as coherent (the wheel's 1.2-2.03 s: tilted 6.5 to
-    # 11 degrees through lenses of 130 to 3,500 px)
-    reading = _through(changes, found.view, found.held + found.rivals)
+    """The reading through the view the picture's circles tell (:func:`_circles_reading`, searched
+    from ``taken``'s view too), where it is closer than ``taken`` (read through the view the changes
+    tell, the reduced frames' pixels) and the changes line up through it no worse; None where the
+    circles tell no view, or one no closer than ``taken``'s. (Not sought where nothing still shows
+    the camera: :func:`measure_angle`'s ``circles``.)"""
+    reading = _circles_reading(changes, kept, taken.view)
     if (reading is None or _clearly_short(reading, taken)
             or reading.omega_high_rad_s - reading.omega_low_rad_s >= taken.omega_high_rad_s - taken.omega_low_rad_s):
         return None
-    return replace(reading, view_from_circles=True)
+    return reading
 
 
 def _circles_alone(changes: list[_Change], kept: list[tuple[int, float, np.ndarray]]) -> PictureAngle | None:
-    """The reading through the view the picture's circles tell, searched from the ellipses its
-    edges draw (:func:`rotrate_cli.scene.circles.ellipse_starts`), where no view the changes tell
-    gives one: a record tilted 65 degrees turning 9 degrees a frame, 0.3 of a turn, whose changes'
-    views (searched from face on) lay tilted 53-69 degrees about other directions, and told no rate.
-    Only views whose axis lies in the picture: there its circles are seen all round it. (A disc
-    tilted 60 degrees, its axis 60 px above the frame, showed arcs that lined up through a view
-    17 px and 3 degrees off: +21% within [+16%, +26%], missing, where its tracks read -0.05%.)
-    The interval holds the rates through the views the circles hold, and through those other
-    ellipses' as coherent (:data:`rotrate_cli.scene.circles.RIVALS`); the reduced frames' pixels."""
+    """The reading through the view the picture's circles tell (:func:`_circles_reading`) where no
+    view the changes tell gives one: a record tilted 65 degrees turning 9 degrees a frame, 0.3 of a
+    turn, whose changes' views (searched from face on) lay tilted 53-69 degrees about other
+    directions, and told no rate."""
+    return _circles_reading(changes, kept, None)
+
+
+def _circles_reading(changes: list[_Change], kept: list[tuple[int, float, np.ndarray]],
+                     start: DiscView | None) -> PictureAngle | None:
+    """The reading through the view the picture's circles tell (:mod:`rotrate_cli.scene.circles`),
+    the most coherent found from ``start`` (where given) and from the ellipses the picture's edges
+    draw (:func:`rotrate_cli.scene.circles.ellipse_starts`: the search is local, and from a view
+    the changes told tilted 35 degrees the wheel turned a quarter found no circle, where it faces
+    the camera within 10); None where none is found. From the ellipses only views whose axis lies
+    in the picture: there its circles are seen all round it (a disc tilted 60 degrees, its axis
+    60 px above the frame, showed arcs that lined up through a view 17 px and 3 degrees off: +21%
+    within [+16%, +26%], missing, where its tracks read -0.05%). The interval holds the rates
+    through the views the circles do not tell from the one read: along its valleys, other starts'
+    views nearly as coherent (the wheel's 1.2-2.03 s: tilted 6.5 to 11 degrees through lenses of
+    130 to 3,500 px), and the other ellipses' (:data:`rotrate_cli.scene.circles.RIVALS`); the
+    reduced frames' pixels."""
     mean = np.mean([image for _, _, image in kept], axis=0, dtype=np.float32)
     rows, columns = mean.shape
-    found = [view for start in ellipse_starts(mean) if (view := circle_view(mean, start)) is not None
-             and 0 <= view.view.centre_px[0] <= columns - 1 and 0 <= view.view.centre_px[1] <= rows - 1]
+    found = [view for view in ((circle_view(mean, start),) if start is not None else ()) if view is not None]
+    found += [view for first in ellipse_starts(mean) if (view := circle_view(mean, first)) is not None
+              and 0 <= view.view.centre_px[0] <= columns - 1 and 0 <= view.view.centre_px[1] <= rows - 1]
     if not found:
-        return None  # (an axis out of the picture: its circles' arcs line up through views far apart)
+        return None
     best = max(found, key=lambda view: view.coherence)
     others = tuple(view.view for view in found if view is not best and view.coherence >= RIVALS * best.coherence)
     reading = _through(changes, best.view, best.held + best.rivals + others)
