@@ -149,22 +149,45 @@ def test_a_record_tilted_65_degrees_turning_9_degrees_a_frame_is_read_from_its_c
     _third_of_a_turn(rng, tmp_path, 4.71, 65.0)
 
 
+def _kept(rng: np.random.Generator, tilt_deg: float, centre: tuple[float, float]) -> list:
+    """The frames :class:`rotrate_cli.scene.picture_angle.AngleFrames` would keep of 12 frames of a
+    record turning 0.157 rad a frame at 30 frames a second, tilted ``tilt_deg``, its axis at ``centre``."""
+    from rotrate_cli.scene.picture_angle import reduced_grey
+
+    face, disc = _record(rng)
+    backdrop = 120.0 + cv2.GaussianBlur(rng.normal(0, 25, (HEIGHT, WIDTH)).astype(np.float32), (0, 0), 6)
+    return [(k, k / 30.0, reduced_grey(np.clip(_seen(face, disc, 0.157 * k, backdrop, tilt_deg, centre), 0, 255)))
+            for k in range(12)]
+
+
+def test_the_circles_are_found_from_the_pictures_ellipses_where_the_changes_view_is_far_off(
+        rng: np.random.Generator) -> None:
+    """From a view tilted 35 degrees about a wrong direction (as the changes told the wheel turned
+    a quarter) the circles' local search finds no view; from the ellipses the picture draws it
+    does, and reads the rate within 1%."""
+    from rotrate_cli.scene.picture_angle import _changes, _circles_reading
+
+    kept = _kept(rng, TILT_DEG, CENTRE)
+    x, y = TRUE_VIEW.centre_px
+    far = DiscView((x / 2 + 10, y / 2 - 10), 45.0, 35.0, 0.5 * TRUE_VIEW.focal_px)  # in the 320-px frames
+    mean = np.mean([image for _, _, image in kept], axis=0, dtype=np.float32)
+    alone = circle_view(mean, far)
+    assert alone is None or math.dist(alone.view.centre_px, (x / 2, y / 2)) > 3.0
+    reading = _circles_reading(_changes(kept), kept, far)
+    assert reading is not None and reading.view_from_circles
+    assert reading.omega_rad_s == pytest.approx(0.157 * 30.0, rel=0.01)
+    assert math.dist(reading.view.centre_px, (x / 2, y / 2)) < 1.0
+
+
 def test_no_view_is_read_from_the_circles_alone_about_an_axis_out_of_the_picture(rng: np.random.Generator) -> None:
     """A record tilted 60 degrees, its axis above the picture: only arcs of its circles are seen,
     and they line up through views far apart (bench-turning's disc so placed read +21% within
     [+16%, +26%] through one). Read from its circles alone only where its axis lies in the picture:
     here none; the same record with its axis in the picture is read."""
-    from rotrate_cli.scene.picture_angle import _changes, _circles_alone, reduced_grey
+    from rotrate_cli.scene.picture_angle import _changes, _circles_alone
 
-    face, disc = _record(rng)
-    backdrop = 120.0 + cv2.GaussianBlur(rng.normal(0, 25, (HEIGHT, WIDTH)).astype(np.float32), (0, 0), 6)
-
-    def kept(centre: tuple[float, float]) -> list:
-        return [(k, k / 30.0, reduced_grey(np.clip(_seen(face, disc, 0.157 * k, backdrop, 60.0, centre), 0, 255)))
-                for k in range(12)]
-
-    above = kept((0.5, -0.15))
+    above = _kept(rng, 60.0, (0.5, -0.15))
     assert _circles_alone(_changes(above), above) is None
-    inside = kept(CENTRE)
+    inside = _kept(rng, 60.0, CENTRE)
     reading = _circles_alone(_changes(inside), inside)
     assert reading is not None and reading.omega_rad_s == pytest.approx(0.157 * 30.0, rel=0.01)
