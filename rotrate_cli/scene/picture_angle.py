@@ -265,8 +265,8 @@ def turned_back_together(images: list[np.ndarray], rolls_deg: list[float]) -> li
     """Each of ``images`` (pictures a moment apart) turned back by its camera's roll (as
     :func:`turned_back`), and all of them black outside what every one of them shows: turned by
     different rolls, their edges of the frame lie apart, and would change the picture where nothing
-    turned (the record rolled 3 degrees a second: its pairs of frames after 13 s, turned back by 40
-    degrees and more, told its turn's sense the wrong way as often as the right one)."""
+    turned (a still scene's two frames a moment apart, turned back alone, differ along the frame's
+    edges by the whole grey level there; together, nowhere)."""
     turned = [turned_back(image, roll) for image, roll in zip(images, rolls_deg, strict=True)]
     if not any(rolls_deg):
         return turned
@@ -406,7 +406,8 @@ def _circles_reading(changes: list[_Change], kept: list[tuple[int, float, np.nda
     reduced frames' pixels."""
     mean = np.mean([image for _, _, image in kept], axis=0, dtype=np.float32)
     rows, columns = mean.shape
-    found = [view for view in ((circle_view(mean, start),) if start is not None else ()) if view is not None]
+    from_start = circle_view(mean, start) if start is not None else None
+    found = [] if from_start is None else [from_start]
     found += [view for first in ellipse_starts(mean) if (view := circle_view(mean, first)) is not None
               and 0 <= view.view.centre_px[0] <= columns - 1 and 0 <= view.view.centre_px[1] <= rows - 1]
     if not found:
