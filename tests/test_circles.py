@@ -140,6 +140,7 @@ def test_the_ellipses_a_records_picture_draws_start_the_circles_search(rng: np.r
     assert ellipse_starts(np.full((HEIGHT, WIDTH), 90.0, np.float32)) == []  # a plain picture draws none
 
 
+@pytest.mark.slow  # (about 5 s: make test-slow; the search from the ellipses is held in make test by its own test)
 def test_a_record_tilted_65_degrees_turning_9_degrees_a_frame_is_read_from_its_circles_alone(
         rng: np.random.Generator, tmp_path: Path) -> None:
     """A third of a turn of a record tilted 65 degrees at 4.71 rad/s (9 degrees a frame, 12
@@ -160,6 +161,7 @@ def _kept(rng: np.random.Generator, tilt_deg: float, centre: tuple[float, float]
             for k in range(12)]
 
 
+@pytest.mark.slow  # (make test-slow, to keep make test under 4 minutes; the ellipses' search is in the test above)
 def test_the_circles_are_found_from_the_pictures_ellipses_where_the_changes_view_is_far_off(
         rng: np.random.Generator) -> None:
     """From a view tilted 35 degrees about a wrong direction (as the changes told the wheel turned
