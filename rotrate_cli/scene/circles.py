@@ -76,7 +76,7 @@ FARTHEST = 16.0
 ELLIPSE_LENGTH_SHARE = 0.1
 ELLIPSE_WITHIN_PX = 1.0
 ELLIPSE_SHORTEST_SHARE = 0.03
-ELLIPSE_ROUNDEST = math.cos(math.radians(MOST_TILT_DEG))
+ELLIPSE_FLATTEST = math.cos(math.radians(MOST_TILT_DEG))
 ELLIPSE_STARTS = 3
 
 
@@ -230,7 +230,7 @@ def ellipse_starts(image: np.ndarray) -> list[DiscView]:
             continue
         (x, y), (first, second), angle = cv2.fitEllipse(contour)
         long_, short = max(first, second) / 2.0, min(first, second) / 2.0
-        if short < ELLIPSE_SHORTEST_SHARE * width or short < ELLIPSE_ROUNDEST * long_ or long_ > 3.0 * width:
+        if short < ELLIPSE_SHORTEST_SHARE * width or short < ELLIPSE_FLATTEST * long_ or long_ > 3.0 * width:
             continue
         along = math.radians(angle if first >= second else angle + 90.0)
         points = contour[:, 0, :].astype(np.float64) - (x, y)
