@@ -13,7 +13,7 @@ import pytest
 from benchmarks.scoring import plane_before_lens
 from rotrate_cli.analysis import analyze
 from rotrate_cli.config import AnalysisConfig
-from rotrate_cli.scene.circles import MIN_COHERENCE, circle_view, coherence, ellipse_starts
+from rotrate_cli.scene.circles import MIN_COHERENCE, Start, circle_view, coherence, ellipse_starts
 from rotrate_cli.scene.disc import DiscView
 from tests.conftest import blob_texture, write_grey_clip
 
@@ -71,7 +71,7 @@ def test_a_records_circles_tell_its_view_from_a_loose_start(rng: np.random.Gener
     picture = _mean_picture(rng)
     x, y = TRUE_VIEW.centre_px
     start = DiscView((x + 3, y - 3), 3.0, TILT_DEG - 3, 0.33 * TRUE_VIEW.focal_px)
-    found = circle_view(picture, start)
+    found = circle_view(picture, [Start(start)])
     assert found is not None and found.coherence > MIN_COHERENCE
     assert math.cos(math.radians(found.view.long_axis_deg)) < -0.99  # the near side at the bottom
     assert found.view.tilt_deg == pytest.approx(TILT_DEG, abs=0.3)
@@ -86,7 +86,7 @@ def test_a_disc_with_no_circle_tells_no_view(rng: np.random.Generator) -> None:
     """A disc printed with blobs all over: its rim is its one circle, and through no view do its
     angles' profiles agree (coherence under :data:`MIN_COHERENCE`)."""
     picture = _mean_picture(rng, grooves=False)
-    assert circle_view(picture, TRUE_VIEW) is None
+    assert circle_view(picture, [Start(TRUE_VIEW)]) is None
 
 
 def _third_of_a_turn(rng: np.random.Generator, tmp_path: Path, omega: float, tilt_deg: float,
@@ -133,8 +133,8 @@ def test_the_ellipses_a_records_picture_draws_start_the_circles_search(rng: np.r
         assert start.tilt_deg == pytest.approx(TILT_DEG, abs=3.0)
         assert abs(math.sin(math.radians(start.long_axis_deg - TRUE_VIEW.long_axis_deg))) < 0.05
         assert math.dist(start.centre_px, TRUE_VIEW.centre_px) < 0.06 * WIDTH
-    found = max((view for start in starts if (view := circle_view(picture, start)) is not None),
-                key=lambda view: view.coherence)
+    found = circle_view(picture, [Start(start) for start in starts])  # screened together, the best searched
+    assert found is not None
     assert math.dist(found.view.centre_px, TRUE_VIEW.centre_px) < 1.0
     assert found.view.tilt_deg == pytest.approx(TILT_DEG, abs=0.3)
     assert ellipse_starts(np.full((HEIGHT, WIDTH), 90.0, np.float32)) == []  # a plain picture draws none
@@ -173,7 +173,7 @@ def test_the_circles_are_found_from_the_pictures_ellipses_where_the_changes_view
     x, y = TRUE_VIEW.centre_px
     far = DiscView((x / 2 + 10, y / 2 - 10), 45.0, 35.0, 0.5 * TRUE_VIEW.focal_px)  # in the 320-px frames
     mean = np.mean([image for _, _, image in kept], axis=0, dtype=np.float32)
-    alone = circle_view(mean, far)
+    alone = circle_view(mean, [Start(far)])
     assert alone is None or math.dist(alone.view.centre_px, (x / 2, y / 2)) > 3.0
     reading = _circles_reading(_changes(kept), kept, far)
     assert reading is not None and reading.view_from_circles

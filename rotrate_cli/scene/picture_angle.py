@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from rotrate_cli.scene.circles import RIVALS, circle_view, ellipse_starts
+from rotrate_cli.scene.circles import Start, circle_view, ellipse_starts
 from rotrate_cli.scene.disc import (
     LAG_SHARES,
     Candidate,
@@ -402,19 +402,14 @@ def _circles_reading(changes: list[_Change], kept: list[tuple[int, float, np.nda
     within [+16%, +26%], missing, where its tracks read -0.05%). The interval holds the rates
     through the views the circles do not tell from the one read: along its valleys, other starts'
     views nearly as coherent (the wheel's 1.2-2.03 s: tilted 6.5 to 11 degrees through lenses of
-    130 to 3,500 px), and the other ellipses' (:data:`rotrate_cli.scene.circles.RIVALS`); the
-    reduced frames' pixels."""
+    130 to 3,500 px), the other ellipses' among them (:data:`rotrate_cli.scene.circles.RIVALS`);
+    the reduced frames' pixels."""
     mean = np.mean([image for _, _, image in kept], axis=0, dtype=np.float32)
-    rows, columns = mean.shape
-    from_start = circle_view(mean, start) if start is not None else None
-    found = [] if from_start is None else [from_start]
-    found += [view for first in ellipse_starts(mean) if (view := circle_view(mean, first)) is not None
-              and 0 <= view.view.centre_px[0] <= columns - 1 and 0 <= view.view.centre_px[1] <= rows - 1]
-    if not found:
+    starts = [] if start is None else [Start(start)]
+    found = circle_view(mean, starts + [Start(first, in_picture=True) for first in ellipse_starts(mean)])
+    if found is None:
         return None
-    best = max(found, key=lambda view: view.coherence)
-    others = tuple(view.view for view in found if view is not best and view.coherence >= RIVALS * best.coherence)
-    reading = _through(changes, best.view, best.held + best.rivals + others)
+    reading = _through(changes, found.view, found.held + found.rivals)
     return None if reading is None else replace(reading, view_from_circles=True)
 
 
