@@ -151,9 +151,9 @@ def test_a_record_tilted_65_degrees_turning_9_degrees_a_frame_is_read_from_its_c
 
 
 def _kept(rng: np.random.Generator, tilt_deg: float, centre: tuple[float, float]) -> list:
-    """The frames :class:`rotrate_cli.scene.picture_angle.AngleFrames` would keep of 12 frames of a
+    """The frames :class:`rotrate_cli.scene.angle_frames.AngleFrames` would keep of 12 frames of a
     record turning 0.157 rad a frame at 30 frames a second, tilted ``tilt_deg``, its axis at ``centre``."""
-    from rotrate_cli.scene.picture_angle import reduced_grey
+    from rotrate_cli.scene.angle_frames import reduced_grey
 
     face, disc = _record(rng)
     backdrop = 120.0 + cv2.GaussianBlur(rng.normal(0, 25, (HEIGHT, WIDTH)).astype(np.float32), (0, 0), 6)

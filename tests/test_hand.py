@@ -10,8 +10,8 @@ import cv2
 import numpy as np
 import pytest
 
+from rotrate_cli.scene.angle_frames import AngleFrames
 from rotrate_cli.scene.hand import measure_hand, window_rates
-from rotrate_cli.scene.picture_angle import AngleFrames
 from rotrate_cli.video.frames import Frame
 
 FPS = 15.0

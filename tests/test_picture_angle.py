@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from rotrate_cli.fitting.outliers import Combined
+from rotrate_cli.scene.angle_frames import AngleFrames
 from rotrate_cli.scene.disc import DiscView, moving_weight
-from rotrate_cli.scene.picture_angle import AngleFrames, PictureAngle, measure_angle
+from rotrate_cli.scene.picture_angle import PictureAngle, measure_angle
 from rotrate_cli.stages.verdict import judge
 from rotrate_cli.video.frames import Frame
 
@@ -260,7 +261,7 @@ def test_frames_turned_back_together_change_nowhere_the_camera_alone_turned() ->
     """A still scene filmed by a rolling camera: its two frames, turned back by their rolls, show
     the same picture; the frame's edges, turned by different rolls, are cut to what both show,
     so that nothing changes between them (each turned back alone, the edges changed)."""
-    from rotrate_cli.scene.picture_angle import turned_back, turned_back_together
+    from rotrate_cli.scene.angle_frames import turned_back, turned_back_together
 
     rng = np.random.default_rng(2)
     scene = cv2.GaussianBlur(rng.uniform(0, 255, (400, 560)).astype(np.float32), (0, 0), 3.0)

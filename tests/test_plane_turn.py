@@ -213,8 +213,8 @@ def _face_on_frames(deg_per_frame: float, count: int, size: int = 240) -> list:
 def _face_on_kept():
     """A face-on disc turning 4 degrees a frame, 30 frames, as the picture's angle keeps them; its
     rate (rad/s); and the plane's map face on about its middle."""
+    from rotrate_cli.scene.angle_frames import AngleFrames
     from rotrate_cli.scene.disc import PlaneMap
-    from rotrate_cli.scene.picture_angle import AngleFrames
 
     kept = AngleFrames()
     for _ in kept.tap(iter(_face_on_frames(4.0, 30))):

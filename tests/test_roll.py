@@ -135,7 +135,7 @@ def test_tracks_are_turned_back_as_the_pictures_are() -> None:
     view was sought from paths the roll had turned)."""
     import pandas as pd
 
-    from rotrate_cli.scene.picture_angle import turned_back as turned_back_picture
+    from rotrate_cli.scene.angle_frames import turned_back as turned_back_picture
     from rotrate_cli.stages.roll import turned_back_positions
 
     size = (320, 180)

@@ -22,7 +22,6 @@ the interval wide, the view the picture's circles tell is read too (:mod:`rotrat
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 from dataclasses import dataclass, replace
 
 import cv2
@@ -41,14 +40,10 @@ from rotrate_cli.scene.disc import (
     shift_deg,
     unrolled,
 )
-from rotrate_cli.video.frames import Frame
 
 #: A reading whose interval is wider than this fraction of its rate either way is read again
 #: through the view the picture's circles tell (:func:`_through_circles`).
 CIRCLES_WANTED = 0.02
-#: Frames kept (in runs of two consecutive ones, evenly over the clip), and their longer side, px.
-MOST_KEPT = 128
-SIDE_PX = 320
 #: Changes measured at most (evenly over those kept), angles a turn and rings of the measurement.
 MOST_CHANGES = 64
 ANGLES = 720
@@ -197,98 +192,6 @@ class PictureAngle:
     view_from_circles: bool = False
 
 
-class AngleFrames:
-    """Keeps frames for the picture's angle: in runs of two consecutive ones, at most
-    :data:`MOST_KEPT` (every other run let go, and the spacing doubled, when more come), reduced to
-    :data:`SIDE_PX` (a tap on the frame stream, as :class:`rotrate_cli.scene.turning.FramePairs`)."""
-
-    def __init__(self, most: int = MOST_KEPT) -> None:
-        self._most = most
-        self._stride = 1
-        self._kept: list[tuple[int, float, np.ndarray]] = []
-        self.width_px = 0
-
-    def clear(self) -> None:
-        self._kept.clear()
-        self._stride = 1
-
-    @property
-    def frames(self) -> list[tuple[int, float, np.ndarray]]:
-        """``(index, time_s, grey image)`` per frame kept, in order."""
-        return list(self._kept)
-
-    def tap(self, frames: Iterator[Frame]) -> Iterator[Frame]:
-        """Yield ``frames`` unchanged, keeping some (see the class)."""
-        for frame in frames:
-            if frame.index % self._stride < 2:
-                self.width_px = frame.image.shape[1]
-                self._kept.append((frame.index, frame.time_s, reduced_grey(frame.image)))
-                while len(self._kept) > self._most:  # (a spacing of 2 keeps every frame: 1, 4, 8 ...)
-                    self._stride = max(4, self._stride * 2)
-                    self._kept = [kept for kept in self._kept if kept[0] % self._stride < 2]
-            yield frame
-
-
-    def turned_back(self, roll_deg_s: float, start_s: float) -> AngleFrames:
-        """A copy whose frames are turned back about their centres by a camera's steady roll
-        (degrees a second, anticlockwise as the picture shows it) since ``start_s``."""
-        copy = AngleFrames(self._most)
-        copy._stride, copy.width_px = self._stride, self.width_px
-        # consecutive frames (whose change is measured) turned back together: see turned_back_together
-        runs: list[list[tuple[int, float, np.ndarray]]] = []
-        for kept in self._kept:
-            if runs and kept[0] == runs[-1][-1][0] + 1:
-                runs[-1].append(kept)
-            else:
-                runs.append([kept])
-        for run in runs:
-            images = turned_back_together([image for _, _, image in run],
-                                          [roll_deg_s * (time_s - start_s) for _, time_s, _ in run])
-            copy._kept += [(index, time_s, image) for (index, time_s, _), image in zip(run, images, strict=True)]
-        return copy
-
-
-def turned_back(image: np.ndarray, roll_deg: float, border: int = cv2.BORDER_CONSTANT) -> np.ndarray:
-    """``image`` turned back about its centre by a camera's roll of ``roll_deg`` (anticlockwise as
-    shown). The corners turned in are black by default (alike in consecutive frames: no change
-    there); ``border``: OpenCV's rule for them otherwise."""
-    rows, columns = image.shape[:2]
-    matrix = cv2.getRotationMatrix2D(((columns - 1) / 2.0, (rows - 1) / 2.0), -roll_deg, 1.0)
-    return cv2.warpAffine(image, matrix, (columns, rows), flags=cv2.INTER_LINEAR, borderMode=border)
-
-
-#: The pictures turned back together are kept this far (pixels) inside what every one of them shows.
-SHOWN_MARGIN_PX = 2
-
-
-def turned_back_together(images: list[np.ndarray], rolls_deg: list[float]) -> list[np.ndarray]:
-    """Each of ``images`` (pictures a moment apart) turned back by its camera's roll (as
-    :func:`turned_back`), and all of them black outside what every one of them shows: turned by
-    different rolls, their edges of the frame lie apart, and would change the picture where nothing
-    turned (a still scene's two frames a moment apart, turned back alone, differ along the frame's
-    edges by the whole grey level there; together, nowhere)."""
-    turned = [turned_back(image, roll) for image, roll in zip(images, rolls_deg, strict=True)]
-    if not any(rolls_deg):
-        return turned
-    shown = np.full(images[0].shape[:2], 255, np.uint8)
-    for roll in rolls_deg:
-        shown = np.minimum(shown, turned_back(np.full(images[0].shape[:2], 255, np.uint8), roll))
-    shown = cv2.erode(shown, np.ones((2 * SHOWN_MARGIN_PX + 1,) * 2, np.uint8)) == 255
-    for image in turned:
-        image[~shown] = 0
-    return turned
-
-
-def reduced_grey(image: np.ndarray, side_px: int = SIDE_PX) -> np.ndarray:
-    """``image`` (grey or BGR) in grey, its longer side at most ``side_px``."""
-    if image.ndim == 3:
-        image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
-    scale = side_px / max(image.shape[:2])
-    if scale < 1:
-        image = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
-    return np.asarray(image, dtype=np.uint8)
-
-
 @dataclass(frozen=True)
 class _Change:
     """A change of the picture: between frames ``index`` and ``index + 1``, at their mid-time."""
@@ -326,11 +229,11 @@ def _apart(a: _Change, b: _Change) -> bool:
 def measure_angle(kept: list[tuple[int, float, np.ndarray]], start: DiscView, width_px: int,
                   search_tilt: bool, search_centre: bool = False, circles: bool = True) -> PictureAngle | None:
     """The picture's turning angle and rate (see the module's notes) from the frames ``kept``
-    (:class:`AngleFrames`), through the view found from ``start`` (the picture's own pixels,
-    ``width_px`` wide; ``search_tilt``: where nothing tells the plane's tilt; ``search_centre``:
-    where the axis's point is a guess; ``circles``: where a loose reading may be read again through
-    the view the picture's circles tell, :func:`_through_circles`); None where too little of the
-    picture turns, or its changes do not line up."""
+    (:class:`rotrate_cli.scene.angle_frames.AngleFrames`), through the view found from ``start``
+    (the picture's own pixels, ``width_px`` wide; ``search_tilt``: where nothing tells the plane's
+    tilt; ``search_centre``: where the axis's point is a guess; ``circles``: where a loose reading
+    may be read again through the view the picture's circles tell, :func:`_through_circles`); None
+    where too little of the picture turns, or its changes do not line up."""
     changes = _changes(kept)
     if len(changes) < MIN_CHANGES or not all(math.isfinite(v) for v in start.centre_px):
         return None
@@ -453,10 +356,11 @@ class MapReading:
 
 def rate_through_map(kept: list[tuple[int, float, np.ndarray]], plane_map: PlaneMap,
                      width_px: int) -> MapReading | None:
-    """The rate of the picture's changes (from the frames ``kept``, :class:`AngleFrames`) unrolled
-    through ``plane_map`` (the tracks' picture, ``width_px`` wide) rather than a view found from
-    the picture, with its chained angles; None where they tell none: the picture's own check of
-    the tracks' plane, and its turn measured without the tracks' sliding."""
+    """The rate of the picture's changes (from the frames ``kept``,
+    :class:`rotrate_cli.scene.angle_frames.AngleFrames`) unrolled through ``plane_map`` (the
+    tracks' picture, ``width_px`` wide) rather than a view found from the picture, with its chained
+    angles; None where they tell none: the picture's own check of the tracks' plane, and its turn
+    measured without the tracks' sliding."""
     changes = _changes(kept)
     if len(changes) < MIN_CHANGES:
         return None

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from rotrate_cli.scene.picture_angle import AngleFrames, reduced_grey
+from rotrate_cli.scene.angle_frames import AngleFrames, reduced_grey
 from rotrate_cli.video.frames import Frame
 
 #: Pairs of consecutive frames kept over the clip (evenly spread), and their longer side, pixels.

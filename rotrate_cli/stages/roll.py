@@ -46,7 +46,7 @@ import cv2
 import numpy as np
 
 from rotrate_cli.runtime.lazy import pandas as pd
-from rotrate_cli.scene.picture_angle import turned_back as turned_back_picture
+from rotrate_cli.scene.angle_frames import turned_back as turned_back_picture
 from rotrate_cli.stages.period import Differences, Period, changing_pixels, find_period, squared_differences
 
 #: The steady rolls tried first, degrees a second (each either way): a camera on a head turned by
@@ -228,7 +228,7 @@ def turned_back_positions(tracks: pd.DataFrame, roll_deg_s: float, start_s: floa
                           size_px: tuple[int, int]) -> pd.DataFrame:
     """A copy of a tracks table (``time_s, x_px, y_px``) whose positions are turned back about the
     picture's centre (``size_px`` its width and height) by ``roll_deg_s`` times their time since
-    ``start_s``, as :func:`rotrate_cli.scene.picture_angle.turned_back` turns a picture: the paths
+    ``start_s``, as :func:`rotrate_cli.scene.angle_frames.turned_back` turns a picture: the paths
     the body drew in a picture that did not roll (the rolled record's tracks, their ellipses turned
     by the roll, were read as a side view's, and neither the picture's turning nor its angle was
     sought)."""
