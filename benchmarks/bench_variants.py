@@ -1,7 +1,8 @@
 """The real videos (../shared/data/real_videos) transformed as other people's footage differs:
 mirrored, turned a quarter and a half turn, at 0.6, 0.5 and 0.25 of their size, every second
 frame (at half the frame rate), played backwards, blurred with noise added, cropped, and seen by
-a camera that rolls (3 degrees a second) or wobbles in the hand (:data:`ROLLS`). Each
+a camera that rolls (3 degrees a second) or wobbles in the hand (:data:`ROLLS`), or comes nearer
+and goes back (:data:`NEARER`: no still background shows it, and it is not taken out). Each
 copy has the clip's own rate in rad/s (the wheel's over the whole clip: it slows, and its sticker
 was tracked to frame 335 of 418, see :func:`benchmarks.scoring.part_truth`); mirrored or
 backwards, the other sense of turning.
@@ -90,6 +91,24 @@ def rolled_frames(deg_per_s: float, wobble: bool, fps: float) -> Callable[[Frame
 #: Camera rolls: name: (degrees a second, with a hand's wobble).
 ROLLS = {"rolled 3 deg/s": (3.0, False), "rolled -3 deg/s, wobbling": (-3.0, True), "wobbling": (0.0, True)}
 
+
+def nearer_and_back_frames(share: float, hertz: float, fps: float) -> Callable[[Frames], Iterator[np.ndarray]]:
+    """The frames as a camera held in the hand, coming nearer and going back, would show them:
+    enlarged about the picture's centre by 1.05 (no edge shows) times ``1 + share * sin(2 pi
+    hertz t)``."""
+    def nearer(frames: Frames) -> Iterator[np.ndarray]:
+        for index, frame in enumerate(frames):
+            height, width = frame.shape[:2]
+            scale = 1.05 + share * np.sin(2 * np.pi * hertz * index / fps)
+            matrix = cv2.getRotationMatrix2D(((width - 1) / 2, (height - 1) / 2), 0.0, scale)
+            yield cv2.warpAffine(frame, matrix, (width, height), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    return nearer
+
+
+#: A camera that comes nearer and goes back, nothing still in the picture to show it (issue 49's
+#: "a camera that moves": its zoom): name: (the picture's scale's swing, a share; how often, Hz).
+NEARER = {"nearer and back 3%": (0.03, 0.2)}
+
 #: name: (the frames transformed, the frame rate's factor, the sense kept (+1) or turned (-1))
 VARIANTS: dict[str, tuple[Callable[[Frames], Iterable[np.ndarray]], float, int]] = {
     "mirrored": (lambda frames: (cv2.flip(f, 1) for f in frames), 1.0, -1),
@@ -120,7 +139,12 @@ def _frames(clip: Path) -> Iterator[np.ndarray]:
 
 def _written(clip: Path, name: str, fps: float) -> Path:
     """The transformed copy, written once."""
-    transform, fps_factor, _ = VARIANTS[name] if name in VARIANTS else (rolled_frames(*ROLLS[name], fps), 1.0, 1)
+    if name in VARIANTS:
+        transform, fps_factor, _ = VARIANTS[name]
+    elif name in NEARER:
+        transform, fps_factor = nearer_and_back_frames(*NEARER[name], fps), 1.0
+    else:
+        transform, fps_factor = rolled_frames(*ROLLS[name], fps), 1.0
     path = OUT / f"{clip.stem}_{re.sub(r'[^a-z0-9.-]+', '_', name).strip('_')}.mp4"
     if path.exists():
         return path
@@ -160,7 +184,7 @@ def parts(only: str | None) -> int:
         clip = VIDEOS / f"{stem}.mp4"
         truth = json.loads(clip.with_suffix(".truth.json").read_text())
         length_s = truth["frames"] / truth["fps"]
-        for name in ("as it is", *VARIANTS, *ROLLS):
+        for name in ("as it is", *VARIANTS, *ROLLS, *NEARER):
             if only and only not in f"{stem} {name}":
                 continue
             source = clip if name == "as it is" else _written(clip, name, truth["fps"])
@@ -216,7 +240,7 @@ def main() -> int:
         truth = json.loads(clip.with_suffix(".truth.json").read_text())
         # over the whole clip: the wheel slows 2%, and its truth is its sticker's mean to frame 335 of 418
         omega = part_truth(clip, truth["omega"], truth["fps"], 0.0, truth["frames"] / truth["fps"])
-        for name in ("as it is", *VARIANTS, *ROLLS):
+        for name in ("as it is", *VARIANTS, *ROLLS, *NEARER):
             if only and only not in f"{stem} {name}":
                 continue
             cases += 1
