@@ -50,7 +50,7 @@ from rotrate_cli.stages.fits import (
 )
 from rotrate_cli.stages.geometry import Geometry, locate, measure
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
-from rotrate_cli.stages.roll import roll_note, sway_note, turned_back_positions, unsteady_camera_period
+from rotrate_cli.stages.roll import roll_note, sway_note, turned_back_positions, unsteady_camera_period, zoom_note
 from rotrate_cli.stages.tracks import NO_BACKGROUND_NOTE, Footage, NothingTracked, ProgressCallback, read_footage
 from rotrate_cli.stages.verdict import Verdict, judge, turns_between
 from rotrate_cli.stages.view_at_rate import view_at_rate
@@ -388,9 +388,9 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
             view_tracks = turned_back_positions(view_tracks, period.roll_deg_s, footage.pairs.start_s,
                                                 (footage.info.width_px, footage.info.height_px))
         footage = replace(footage, pairs=footage.pairs.turned_back(period.roll_deg_s))
-    if period is not None and (period.roll_deg_s or period.sway_deg):
-        # the tracks, followed in the rolling or swaying picture with nothing still to take the
-        # camera's motion out of them, are no evidence of the count of returns a turn (the rolled
+    if period is not None and (period.roll_deg_s or period.sway_deg or period.zoom_share):
+        # the tracks, followed in the rolling, swaying or zooming picture with nothing still to take
+        # the camera's motion out of them, are no evidence of the count of returns a turn (the rolled
         # record's first 12 s: three tracks on its sliding label told 2, and the result was half
         # the truth, its interval missing)
         tracks_rate = None
@@ -436,7 +436,8 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
                                         footage.info.clock_resolution_s, config.window_s or 0.0,
                                         angle_windows(footage, measured_angle),
                                         roll_deg_s=period.roll_deg_s if period is not None else 0.0,
-                                        sway_deg=period.sway_deg if period is not None else 0.0)
+                                        sway_deg=period.sway_deg if period is not None else 0.0,
+                                        zoom_share=period.zoom_share if period is not None else 0.0)
     footage.pairs.clear()
     size_px = (footage.info.width_px, footage.info.height_px)
     direction, in_picture = result.direction, False
@@ -455,10 +456,12 @@ def _result(footage: Footage, config: AnalysisConfig, geometry: Geometry, checke
         checks = (f"the tracks' own rate ({combined.omega_rad_s:.4g} rad/s) is not the one reported; "
                   f"{len(checks) + len(checked.doubts)} check(s) of it are left out",)
     warnings = footage.warnings + geometry.notes + notes + checks + verdict.notes
-    if period is not None and (period.roll_deg_s or period.sway_deg) and verdict.rate_from == "repetition":
-        # the picture came back once the camera's roll was taken out (or its sway allowed): that
-        # is what is said of the camera, rather than that nothing tells its motion
-        said = sway_note(period) if period.sway_deg else roll_note(period.roll_deg_s)
+    if (period is not None and (period.roll_deg_s or period.sway_deg or period.zoom_share)
+            and verdict.rate_from == "repetition"):
+        # the picture came back once the camera's roll was taken out (or its sway or zoom allowed):
+        # that is what is said of the camera, rather than that nothing tells its motion
+        said = (sway_note(period) if period.sway_deg else zoom_note(period) if period.zoom_share
+                else roll_note(period.roll_deg_s))
         warnings = tuple(said if warning == NO_BACKGROUND_NOTE else warning for warning in warnings)
     camera_turn = period.roll_deg_s if period is not None and verdict.rate_from == "repetition" else 0.0
     if verdict.rate_from == "turning" and reading is not None and reading.camera_turn_deg_s:

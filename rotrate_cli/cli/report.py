@@ -174,6 +174,7 @@ def to_dict(analysis: Analysis) -> dict[str, Any]:
             "detrended": analysis.period.detrended,
             "roll_deg_s": _number(analysis.period.roll_deg_s, 3),
             "sway_deg": _number(analysis.period.sway_deg, 1),
+            "zoom_share": _number(analysis.period.zoom_share, 3),
         },
         "shake": None if analysis.shake is None else {
             "rms_px": _number(analysis.shake.rms_px, 3), "largest_px": _number(analysis.shake.largest_px, 3),

@@ -147,6 +147,8 @@ class Period:
         sway_deg: the turn of the whole picture, degrees either way, that two pictures were
             allowed to differ by and still count as the same (0: none): a camera that sways in the
             hand, with no still background to measure it by (:mod:`rotrate_cli.stages.roll`).
+        zoom_share: likewise, how much larger or smaller (a share, either way) the whole picture
+            was allowed to be: a camera coming nearer and going back (0: none).
     """
 
     period_s: float
@@ -166,6 +168,7 @@ class Period:
     sooner_s: float = math.nan
     roll_deg_s: float = 0.0
     sway_deg: float = 0.0
+    zoom_share: float = 0.0
 
     def over(self, turns: int) -> Period:
         """The repetition where the closest return spans ``turns`` repeats."""

@@ -28,7 +28,9 @@ So where no still background shows and the plain return is doubtful (none, or fe
 differ by a small turn of the whole picture about its centre (:data:`SWAY_DEG` either way) and
 still count as the same (:func:`swayed_period`): a camera that sways in the hand turns the picture
 by a degree or two back and forth, and the body's turn does not line up with that. Then the steady
-roll is sought, then the roll with the sway allowed (:func:`unsteady_camera_period`). The shared
+roll is sought, then the roll with the sway allowed, then a zoom of the whole picture about its
+centre (:data:`ZOOM_SHARE` either way: a camera coming nearer and going back;
+:func:`unsteady_camera_period`). The shared
 record, its picture swaying 1.5 and 0.4 degrees at 0.9 and 2.3 Hz with a 4-pixel shake (no still
 background): plainly its picture came back only where the sway lined up too, after five turns
 (-80%, weak); allowed the sway, after each turn, 13 times, -0.004%. Rolled 3 degrees a second as
@@ -78,6 +80,11 @@ SWAY_STEP_DEG = 1.0
 #: The sway is sought over the first this many frames only: its differences cost as many matrix
 #: products as sway steps (600 frames, 7 steps: about half a second).
 SWAY_FRAMES = 600
+#: A camera held in the hand also comes nearer and goes back: pictures may be larger or smaller
+#: about their centre by up to this share either way, in steps of ZOOM_STEP (a 64-pixel
+#: thumbnail's edge moves a sixth of a pixel in half a step), and still count as the same.
+ZOOM_SHARE = 0.04
+ZOOM_STEP = 0.01
 
 
 def rolled_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int],
@@ -136,8 +143,9 @@ def unsteady_camera_period(times_s: np.ndarray, images: np.ndarray, shape: tuple
     sooner return that matched less well, :attr:`Period.sooner_s`, so that it may span several
     turns, those between spoiled), it is sought allowing the camera a sway
     (:func:`swayed_period`), with a steady roll taken out (:func:`rolled_period`), then both, and
-    the first found that comes back more often than the plain one, its pictures about as alike
-    (their likeness within :data:`LESS_ALIKE`), is taken. The swaying record came back plainly
+    then allowing the picture to be larger or smaller (:func:`zoomed_period`), and the first found
+    that comes back more often than the plain one, its pictures about as alike (their likeness
+    within :data:`LESS_ALIKE`), is taken. The swaying record came back plainly
     only after five turns, where the sway lined up as well (3 times, likeness 0.20), and allowed
     the sway after each turn (13 times, 0.20); a tilted disc filmed rolling and swaying came back
     plainly once, 1.3% early (0.30), and with the roll taken out 6 times (0.02). (The sway is
@@ -148,7 +156,8 @@ def unsteady_camera_period(times_s: np.ndarray, images: np.ndarray, shape: tuple
         return plain
     searches = (lambda: swayed_period(times_s, images, shape, clock_resolution_s),
                 lambda: rolled_period(times_s, images, shape, clock_resolution_s),
-                lambda: swayed_period(times_s, images, shape, clock_resolution_s, rolling=True))
+                lambda: swayed_period(times_s, images, shape, clock_resolution_s, rolling=True),
+                lambda: zoomed_period(times_s, images, shape, clock_resolution_s))
     for search in searches:
         found = search()
         if found is not None and (plain is None or (found.repeats > plain.repeats
@@ -174,6 +183,48 @@ def swayed_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int
     if found is None or found.repeats < MIN_REPEATS:
         return None
     return replace(found, sway_deg=SWAY_DEG)
+
+
+def zoomed_period(times_s: np.ndarray, images: np.ndarray, shape: tuple[int, int],
+                  clock_resolution_s: float = 0.0) -> Period | None:
+    """The clip's repetition where two pictures may differ by a small enlargement of the whole
+    picture about its centre (:data:`ZOOM_SHARE` either way: a camera coming nearer and going back
+    in the hand) and still count as the same, over the first :data:`SWAY_FRAMES` frames; None where
+    it does not come back at least :data:`MIN_REPEATS` times. The shared record, its picture 3%
+    larger and smaller once in five seconds: plainly back best after three turns, and sooner less
+    alike (-66.6%, weak); allowed the zoom, after each turn, 16 times, +0.01%."""
+    times_s, images = times_s[:SWAY_FRAMES], images[:SWAY_FRAMES]
+    if len(times_s) < 8 or images.size == 0:
+        return None
+    found = find_period(times_s, images, clock_resolution_s, zooming(shape))
+    if found is None or found.repeats < MIN_REPEATS:
+        return None
+    return replace(found, zoom_share=ZOOM_SHARE)
+
+
+def zooming(shape: tuple[int, int], share: float = ZOOM_SHARE) -> Differences:
+    """Pictures' differences allowing a zoom: for each pair of frames, the least squared difference
+    over the first made larger or smaller about its centre by up to ``share`` either way
+    (:data:`ZOOM_STEP` steps), over the pixels that change most (as the plain differences are)."""
+    steps = np.arange(-share, share + 1e-9, ZOOM_STEP)
+    rows, columns = shape
+    centre = ((columns - 1) / 2.0, (rows - 1) / 2.0)
+
+    def differences(images: np.ndarray) -> np.ndarray:
+        pixels, mean = changing_pixels(images)
+        chosen = slice(None) if pixels is None else pixels
+        mean = mean[chosen].astype(np.float32)
+        values = images[:, chosen].astype(np.float32) - mean
+        least = squared_differences(values, values)  # no zoom
+        for step in steps[np.abs(steps) > 1e-9]:
+            matrix = cv2.getRotationMatrix2D(centre, 0.0, 1.0 + float(step))
+            scaled = np.stack([cv2.warpAffine(image.reshape(shape), matrix, (columns, rows), flags=cv2.INTER_LINEAR,
+                                              borderMode=cv2.BORDER_REPLICATE).ravel()
+                               for image in images])[:, chosen].astype(np.float32) - mean
+            np.minimum(least, squared_differences(scaled, values), out=least)
+        return np.minimum(least, least.T)  # (i enlarged to j and j shrunk to i: about the same zoom)
+
+    return differences
 
 
 def swaying(shape: tuple[int, int], sway_deg: float = SWAY_DEG) -> Differences:
@@ -248,6 +299,14 @@ def sway_note(period: Period) -> str:
             f"as by a camera that sways in the hand{rolling}: the rate is the clip's repetition allowing the whole "
             f"picture a turn of up to {period.sway_deg:g} degrees either way (a turn of the whole scene would look "
             f"the same; sought over the clip's first {SWAY_FRAMES} frames at most)")
+
+
+def zoom_note(period: Period) -> str:
+    """What the user is told where the repetition was found allowing the camera to come nearer."""
+    return (f"no still background is seen, and the picture comes back after each turn only larger or smaller by a "
+            f"few percent, as by a camera coming nearer and going back in the hand: the rate is the clip's "
+            f"repetition allowing the whole picture to be up to {100 * period.zoom_share:g}% larger or smaller "
+            f"(sought over the clip's first {SWAY_FRAMES} frames at most)")
 
 
 def roll_note(roll_deg_s: float) -> str:

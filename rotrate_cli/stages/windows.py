@@ -9,7 +9,7 @@ import numpy as np
 
 from rotrate_cli.runtime.lazy import pandas as pd
 from rotrate_cli.stages.period import Period, Thumbnails, find_period
-from rotrate_cli.stages.roll import swaying, turned_back
+from rotrate_cli.stages.roll import swaying, turned_back, zooming
 from rotrate_cli.stages.verdict import MIN_TRACKS, WEAK_HALF_WIDTH, Verdict
 
 #: Per window, the picture's angle's rate and interval, or None (see
@@ -19,7 +19,7 @@ AngleWindows = Callable[[np.ndarray, float], list[tuple[float, float, float] | N
 
 def judged_series(series: pd.DataFrame, verdict: Verdict, thumbnails: Thumbnails, clock_resolution_s: float,
                   window_s: float, angle_windows: AngleWindows | None = None, roll_deg_s: float = 0.0,
-                  sway_deg: float = 0.0) -> pd.DataFrame:
+                  sway_deg: float = 0.0, zoom_share: float = 0.0) -> pd.DataFrame:
     """omega(t) from the source behind the headline (``series``: the tracks' windows, see
     :func:`rotrate_cli.fitting.series.rate_series`), with ``rate_from`` and ``quality`` per window.
     Where the headline is the picture's return, each window that holds a return is rated by it
@@ -31,7 +31,8 @@ def judged_series(series: pd.DataFrame, verdict: Verdict, thumbnails: Thumbnails
     shorter than a turn: the wheel's 2 s windows of a 2.8 s turn). ``roll_deg_s``: the camera's
     steady roll the headline's return was found with (:mod:`rotrate_cli.stages.roll`), taken out
     of each window's pictures likewise; ``sway_deg``: the camera's sway it was found allowing
-    (:func:`rotrate_cli.stages.roll.swaying`), allowed likewise (and those windows are weak)."""
+    (:func:`rotrate_cli.stages.roll.swaying`), allowed likewise (and those windows are weak);
+    ``zoom_share``: the zoom it was found allowing (:func:`rotrate_cli.stages.roll.zooming`), likewise."""
     rows = series.copy()
     rate_from = np.full(len(rows), "tracks", dtype=object)
     quality = np.full(len(rows), "good", dtype=object)
@@ -49,9 +50,9 @@ def judged_series(series: pd.DataFrame, verdict: Verdict, thumbnails: Thumbnails
                 pictures = images[inside]
                 if roll_deg_s and thumbnails.shape is not None:
                     pictures = turned_back(times[inside], pictures, thumbnails.shape, roll_deg_s)
-                returns[index] = find_period(times[inside], pictures, clock_resolution_s,
-                                             swaying(thumbnails.shape, sway_deg) if sway_deg and thumbnails.shape
-                                             else None)
+                allowing = (swaying(thumbnails.shape, sway_deg) if sway_deg and thumbnails.shape
+                            else zooming(thumbnails.shape, zoom_share) if zoom_share and thumbnails.shape else None)
+                returns[index] = find_period(times[inside], pictures, clock_resolution_s, allowing)
     by_angle: list[tuple[float, float, float] | None] = [None] * len(rows)
     unreturned = [index for index, found in enumerate(returns) if found is None or found.far_apart]
     if angle_windows is not None and verdict.rate_from in ("repetition", "turning") and unreturned:
@@ -65,7 +66,7 @@ def judged_series(series: pd.DataFrame, verdict: Verdict, thumbnails: Thumbnails
             agrees = abs(omega[index] / verdict.omega_rad_s - 1.0) <= WEAK_HALF_WIDTH
             # a window's few returns read through a sway are not held to their interval (the
             # swaying record's first 12 s: one 4-s window read 3.606 within [3.577, 3.635])
-            quality[index] = "good" if agrees and verdict.quality == "good" and not sway_deg else "weak"
+            quality[index] = "good" if agrees and verdict.quality == "good" and not (sway_deg or zoom_share) else "weak"
             continue
         if by_angle[index] is not None:
             omega[index], low[index], high[index] = by_angle[index]
