@@ -57,11 +57,11 @@ bench-memory: $(STAMP)
 bench-real: $(STAMP)
 	$(BIN)/python benchmarks/bench_real.py
 
-## bench-variants: the real videos mirrored, turned, shrunk, thinned, reversed, noisy and cropped (written once to bench_out/variants): rate, interval and sense of turning, default settings (about a minute)
+## bench-variants: the real videos mirrored, turned, shrunk, thinned, reversed, noisy, cropped, rolled, wobbling and coming nearer (written once to bench_out/variants): rate, interval and sense of turning, default settings (about a minute)
 bench-variants: $(STAMP)
 	$(BIN)/python benchmarks/bench_variants.py
 
-## bench-variants-parts: each of those copies cut to 0.3 and 0.6 of a turn from 2 s and 0.9 from 8 s (90 parts, about 12 minutes): none called good that is off
+## bench-variants-parts: each of those copies cut to 0.3 and 0.6 of a turn from 2 s and 0.9 from 8 s (96 parts, about 13 minutes): none called good that is off
 bench-variants-parts: $(STAMP)
 	$(BIN)/python benchmarks/bench_variants.py --parts
 
