@@ -42,6 +42,7 @@ plain return finds it, and none of this is tried.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import cv2
@@ -210,21 +211,12 @@ def zooming(shape: tuple[int, int], share: float = ZOOM_SHARE) -> Differences:
     rows, columns = shape
     centre = ((columns - 1) / 2.0, (rows - 1) / 2.0)
 
-    def differences(images: np.ndarray) -> np.ndarray:
-        pixels, mean = changing_pixels(images)
-        chosen = slice(None) if pixels is None else pixels
-        mean = mean[chosen].astype(np.float32)
-        values = images[:, chosen].astype(np.float32) - mean
-        least = squared_differences(values, values)  # no zoom
-        for step in steps[np.abs(steps) > 1e-9]:
-            matrix = cv2.getRotationMatrix2D(centre, 0.0, 1.0 + float(step))
-            scaled = np.stack([cv2.warpAffine(image.reshape(shape), matrix, (columns, rows), flags=cv2.INTER_LINEAR,
-                                              borderMode=cv2.BORDER_REPLICATE).ravel()
-                               for image in images])[:, chosen].astype(np.float32) - mean
-            np.minimum(least, squared_differences(scaled, values), out=least)
-        return np.minimum(least, least.T)  # (i enlarged to j and j shrunk to i: about the same zoom)
+    def scaled(step: float) -> Callable[[np.ndarray], np.ndarray]:
+        matrix = cv2.getRotationMatrix2D(centre, 0.0, 1.0 + step)
+        return lambda image: cv2.warpAffine(image, matrix, (columns, rows), flags=cv2.INTER_LINEAR,
+                                            borderMode=cv2.BORDER_REPLICATE)
 
-    return differences
+    return _allowing(shape, [scaled(float(step)) for step in steps[np.abs(steps) > 1e-9]])
 
 
 def swaying(shape: tuple[int, int], sway_deg: float = SWAY_DEG) -> Differences:
@@ -233,17 +225,27 @@ def swaying(shape: tuple[int, int], sway_deg: float = SWAY_DEG) -> Differences:
     (:data:`SWAY_STEP_DEG` steps), over the pixels that change most (as the plain differences are)."""
     steps = np.arange(-sway_deg, sway_deg + 1e-9, SWAY_STEP_DEG)
 
+    def turned(step: float) -> Callable[[np.ndarray], np.ndarray]:
+        return lambda image: turned_back_picture(image, step, cv2.BORDER_REPLICATE)
+
+    return _allowing(shape, [turned(float(step)) for step in steps[steps != 0.0]])
+
+
+def _allowing(shape: tuple[int, int], moves: list[Callable[[np.ndarray], np.ndarray]]) -> Differences:
+    """Pictures' differences where the first of each pair may be moved by any of ``moves`` (each
+    a picture of ``shape`` to one), the least squared difference taken; over the pixels that change
+    most (as the plain differences are)."""
     def differences(images: np.ndarray) -> np.ndarray:
         pixels, mean = changing_pixels(images)
         chosen = slice(None) if pixels is None else pixels
         mean = mean[chosen].astype(np.float32)
         values = images[:, chosen].astype(np.float32) - mean
-        least = squared_differences(values, values)  # no sway
-        for step in steps[steps != 0.0]:
-            turned = np.stack([turned_back_picture(image.reshape(shape), float(step), cv2.BORDER_REPLICATE).ravel()
-                               for image in images])[:, chosen].astype(np.float32) - mean
-            np.minimum(least, squared_differences(turned, values), out=least)
-        return np.minimum(least, least.T)  # (i turned to j and j turned to i: the same sway)
+        least = squared_differences(values, values)  # not moved
+        for move in moves:
+            moved = np.stack([move(image.reshape(shape)).ravel() for image in images])
+            moved = moved[:, chosen].astype(np.float32) - mean
+            np.minimum(least, squared_differences(moved, values), out=least)
+        return np.minimum(least, least.T)  # (i moved to j and j moved back to i: about the same move)
 
     return differences
 
