@@ -412,6 +412,10 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
             if over_return:
                 omega, rate_from = seen.omega_rad_s, "turning"
                 thin_part, plane, plane_changes = seen.thin_part, seen.plane, seen.plane_changes
+                # the count whose rate was to be shown is not: its words go (one number, one source)
+                shown = _nearest_tracks(period, list(told.candidates), tracks, tracks_used)[1]
+                if shown:
+                    weak = [why.replace(shown, "") for why in weak]
     sooner = not period.far_apart and math.isfinite(period.sooner_s)
     by_turning_alone = confirmed and told.told_by == "the picture's turning"
     spans = _turns_by_angle(period, repeats, angle) if sooner and by_turning_alone else None
@@ -464,6 +468,9 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
                 under = _tracks_under(period, tracks, tracks_used)
                 if rate_from == "repetition" and (period.excess > LOOK_ALIKE_EXCESS or under):
                     omega, rate_from = tracks.omega_rad_s, "tracks"
+                    shown = _nearest_tracks(period, list(told.candidates), tracks, tracks_used)[1]
+                    if shown:  # the count's rate is not the one shown: the tracks' is
+                        weak = [why.replace(shown, "") for why in weak]
                 reported = ("the picture's own turning is reported (above)" if rate_from == "turning"
                             else "the repetition's rate is reported, as the return is exact" if rate_from != "tracks"
                             else "the tracks' rate is reported, as the return is not exact"
