@@ -399,7 +399,7 @@ def judge(tracks: Combined | None, period: Period | None, tracks_used: int = 0,
             # watched the picture over all the return was timed on (the shared wheel, its picture
             # growing and shrinking 3% with nothing still in it, 0.9 of a turn: the picture came back
             # after 2.40 s as nearly as a look-alike does, +15%; its angle followed 0.9 of a turn at
-            # 2.277 rad/s within +-0.5%, 313 degrees in those 2.40 s; the tracks' 0.13 rad/s, -94%,
+            # 2.277 rad/s within +-0.5%, 313 degrees in those 2.40 s; the tracks' 0.20 rad/s, -91%,
             # was reported)
             over_return = seen.turned_deg >= min(WHOLE_TURN_DEG, math.degrees(seen.omega_rad_s * period.period_s))
             weak.append(f"the picture's own turning angle reads {seen.omega_rad_s:.4g} rad/s within "
